@@ -1,0 +1,175 @@
+#include "kernels/mesh/mesh_queries.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+
+namespace topotrack {
+namespace {
+constexpr double kRadToDeg = 180.0 / 3.14159265358979323846;
+
+double angle_between(const Vec3& a, const Vec3& b) {
+  // atan2 form: accurate for tiny and near-180° angles.
+  return std::atan2(a.cross(b).norm(), a.dot(b));
+}
+}  // namespace
+
+Stats make_stats(std::vector<double> v) {
+  Stats s;
+  s.count = v.size();
+  if (v.empty()) return s;
+  s.min = *std::min_element(v.begin(), v.end());
+  s.max = *std::max_element(v.begin(), v.end());
+  s.mean = std::accumulate(v.begin(), v.end(), 0.0) / double(v.size());
+  auto mid = v.begin() + v.size() / 2;
+  std::nth_element(v.begin(), mid, v.end());
+  s.median = *mid;
+  return s;
+}
+
+Vec3 face_normal(const SurfaceMesh& m, Face f) {
+  const auto t = m.vertices(f);
+  const Vec3 n = (m.position(t[1]) - m.position(t[0])).cross(m.position(t[2]) - m.position(t[0]));
+  const double len = n.norm();
+  return len > 0 ? Vec3(n / len) : Vec3::Zero();
+}
+
+double face_area(const SurfaceMesh& m, Face f) {
+  const auto t = m.vertices(f);
+  return 0.5 * (m.position(t[1]) - m.position(t[0])).cross(m.position(t[2]) - m.position(t[0])).norm();
+}
+
+std::vector<Vec3> vertex_normals(const SurfaceMesh& m) {
+  std::vector<Vec3> n(m.vertices_size(), Vec3::Zero());
+  for (Index f = 0; f < m.faces_size(); ++f) {
+    if (m.is_deleted(Face(f))) continue;
+    const auto t = m.vertices(Face(f));
+    const Vec3 fn = face_normal(m, Face(f));
+    for (int k = 0; k < 3; ++k) {
+      const Vec3& p = m.position(t[k]);
+      const double a = angle_between(m.position(t[(k + 1) % 3]) - p, m.position(t[(k + 2) % 3]) - p);
+      n[t[k].idx] += a * fn;
+    }
+  }
+  for (auto& v : n) {
+    const double len = v.norm();
+    if (len > 0) v /= len;
+  }
+  return n;
+}
+
+BoundingBox bounding_box(const SurfaceMesh& m) {
+  BoundingBox b;
+  for (Index v = 0; v < m.vertices_size(); ++v)
+    if (!m.is_deleted(Vertex(v))) b.extend(m.position(Vertex(v)));
+  return b;
+}
+
+double surface_area(const SurfaceMesh& m) {
+  double a = 0;
+  for (Index f = 0; f < m.faces_size(); ++f)
+    if (!m.is_deleted(Face(f))) a += face_area(m, Face(f));
+  return a;
+}
+
+Index connected_components(const SurfaceMesh& m, std::vector<Index>* labels_out) {
+  std::vector<Index> labels(m.vertices_size(), kInvalidIndex);
+  std::vector<Index> stack;
+  std::vector<Vertex> ring;
+  Index count = 0;
+  for (Index s = 0; s < m.vertices_size(); ++s) {
+    if (m.is_deleted(Vertex(s)) || labels[s] != kInvalidIndex) continue;
+    labels[s] = count;
+    stack.push_back(s);
+    while (!stack.empty()) {
+      const Index v = stack.back();
+      stack.pop_back();
+      m.one_ring(Vertex(v), ring);
+      for (Vertex w : ring)
+        if (labels[w.idx] == kInvalidIndex) {
+          labels[w.idx] = count;
+          stack.push_back(w.idx);
+        }
+    }
+    ++count;
+  }
+  if (labels_out) *labels_out = std::move(labels);
+  return count;
+}
+
+long euler_characteristic(const SurfaceMesh& m) {
+  return long(m.n_vertices()) - long(m.n_edges()) + long(m.n_faces());
+}
+
+long genus(const SurfaceMesh& m) {
+  return (2 * long(connected_components(m)) - euler_characteristic(m)) / 2;
+}
+
+std::size_t boundary_edge_count(const SurfaceMesh& m) {
+  std::size_t n = 0;
+  for (Index e = 0; e < m.edges_size(); ++e)
+    if (!m.is_deleted(Edge(e)) && m.is_boundary(Edge(e))) ++n;
+  return n;
+}
+
+Stats edge_length_stats(const SurfaceMesh& m) {
+  std::vector<double> len;
+  len.reserve(m.n_edges());
+  for (Index e = 0; e < m.edges_size(); ++e)
+    if (!m.is_deleted(Edge(e))) len.push_back((m.position(m.vertex(Edge(e), 0)) - m.position(m.vertex(Edge(e), 1))).norm());
+  return make_stats(std::move(len));
+}
+
+double mean_edge_length(const SurfaceMesh& m) {
+  double sum = 0;
+  std::size_t n = 0;
+  for (Index e = 0; e < m.edges_size(); ++e)
+    if (!m.is_deleted(Edge(e))) {
+      sum += (m.position(m.vertex(Edge(e), 0)) - m.position(m.vertex(Edge(e), 1))).norm();
+      ++n;
+    }
+  return n ? sum / double(n) : 0.0;
+}
+
+std::array<double, 3> face_angles_deg(const SurfaceMesh& m, Face f) {
+  const auto t = m.vertices(f);
+  std::array<double, 3> a{};
+  for (int k = 0; k < 3; ++k) {
+    const Vec3& p = m.position(t[k]);
+    a[k] = angle_between(m.position(t[(k + 1) % 3]) - p, m.position(t[(k + 2) % 3]) - p) * kRadToDeg;
+  }
+  return a;
+}
+
+double dihedral_angle_deg(const SurfaceMesh& m, Edge e) {
+  const Halfedge h0 = m.halfedge(e, 0), h1 = m.halfedge(e, 1);
+  if (m.is_boundary(h0) || m.is_boundary(h1)) return 180.0;
+  const Vec3 n0 = face_normal(m, m.face(h0)), n1 = face_normal(m, m.face(h1));
+  // Angle between the faces: 180° minus the angle between their normals.
+  return 180.0 - angle_between(n0, n1) * kRadToDeg;
+}
+
+QualityStats quality_stats(const SurfaceMesh& m) {
+  QualityStats q;
+  std::size_t nf = 0, below10 = 0;
+  for (Index f = 0; f < m.faces_size(); ++f) {
+    if (m.is_deleted(Face(f))) continue;
+    ++nf;
+    const auto a = face_angles_deg(m, Face(f));
+    const double mn = std::min({a[0], a[1], a[2]});
+    q.min_angle_deg = std::min(q.min_angle_deg, mn);
+    below10 += mn < 10.0;
+    q.below_2deg += mn < 2.0;
+  }
+  q.share_below_10deg = nf ? double(below10) / double(nf) : 0.0;
+  for (Index e = 0; e < m.edges_size(); ++e) {
+    if (m.is_deleted(Edge(e)) || m.is_boundary(Edge(e))) continue;
+    const double d = dihedral_angle_deg(m, Edge(e));
+    q.min_dihedral_deg = std::min(q.min_dihedral_deg, d);
+    q.dihedral_below_45deg += d < 45.0;
+  }
+  q.edge_length = edge_length_stats(m);
+  return q;
+}
+
+}  // namespace topotrack
