@@ -1,0 +1,108 @@
+// Non-rigid alignment (§4.2) on the real sequences: coarse + fine for frame 1 onto a re-sampled frame
+// 16 (large motion), over mesh sizes (0: samba 10k vertices, 1: elephant 42k, 2: elephant refined to
+// ~110k by improve_mesh), at a graph density (percent of the paper's), with the direct (0) or the
+// separable-PCG (1) Gauss–Newton solve, with the split between graph,
+// correspondences, assembly, factorisation and solve as counters; and the two Cholesky backends on the
+// same Gauss–Newton systems (one round each).
+// Run: registration_bench --benchmark_format=json [--benchmark_filter=...]
+#include <benchmark/benchmark.h>
+
+#include <map>
+#include <memory>
+
+#include "kernels/registration/coarse.hpp"
+#include "kernels/registration/fine.hpp"
+#include "tests/kernels/registration/real_data.hpp"
+
+namespace topotrack {
+namespace {
+
+struct Fixture {
+  SurfaceMesh source;
+  std::unique_ptr<TargetSurface> target;
+};
+
+const Fixture& fixture(int size) {
+  static std::map<int, std::unique_ptr<Fixture>> cache;
+  auto& f = cache[size];
+  if (!f) {
+    f = std::make_unique<Fixture>();
+    test::AlignmentPair pair = test::make_pair(size == 0 ? "samba" : "elephant", 1, 15);
+    f->source = size == 2 ? test::resample(pair.source, 0.62) : std::move(pair.source);
+    f->target = std::make_unique<TargetSurface>(TargetSurface::from_mesh(pair.target_mesh));
+  }
+  return *f;
+}
+
+void BM_AlignCoarseFine(benchmark::State& state) {
+  const Fixture& f = fixture(int(state.range(0)));
+  CoarseParams params;
+  params.graph_density = double(state.range(1)) / 100.0;
+  if (state.range(2)) params.linear_solver = CoarseLinearSolver::SeparablePCG;
+  CoarseReport c;
+  FineReport fr;
+  for (auto _ : state) {
+    state.PauseTiming();
+    SurfaceMesh mesh = f.source.clone();
+    state.ResumeTiming();
+    c = align_coarse(mesh, *f.target, params);
+    fr = align_fine(mesh, *f.target);
+    benchmark::DoNotOptimize(mesh.positions().data());
+  }
+  state.counters["vertices"] = double(f.source.n_vertices());
+  state.counters["nodes"] = c.nodes;
+  state.counters["rounds"] = c.iterations;
+  state.counters["pcg_iterations"] = c.pcg_iterations;
+  state.counters["coarse_graph_s"] = c.seconds_graph;
+  state.counters["coarse_corr_s"] = c.seconds_correspondences;
+  state.counters["coarse_assembly_s"] = c.seconds_assembly;
+  state.counters["coarse_factor_s"] = c.seconds_factorisation;
+  state.counters["coarse_solve_s"] = c.seconds_solve;
+  state.counters["fine_raycast_s"] = fr.seconds_raycast;
+  state.counters["fine_assembly_s"] = fr.seconds_assembly;
+  state.counters["fine_solve_s"] = fr.seconds_solve;
+}
+BENCHMARK(BM_AlignCoarseFine)
+    ->Args({0, 100, 0})
+    ->Args({0, 100, 1})
+    ->Args({0, 25, 0})
+    ->Args({1, 100, 0})
+    ->Args({1, 100, 1})
+    ->Args({1, 25, 0})
+    ->Args({2, 25, 0})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime()
+    ->Iterations(1);
+
+// One Gauss–Newton round with either backend: the time of one numeric factorisation.
+void BM_Factorisation(benchmark::State& state) {
+  const Fixture& f = fixture(int(state.range(0)));
+  CoarseParams p;
+  p.solver = state.range(1) ? CholeskyBackend::Cholmod : CholeskyBackend::EigenLDLT;
+  p.max_iterations = 1;
+  CoarseReport c;
+  for (auto _ : state) {
+    state.PauseTiming();
+    SurfaceMesh mesh = f.source.clone();
+    state.ResumeTiming();
+    c = align_coarse(mesh, *f.target, p);
+  }
+  state.SetLabel(state.range(1) ? "cholmod" : "eigen_ldlt");
+  state.counters["nodes"] = c.nodes;
+  state.counters["factor_s"] = c.seconds_factorisation / std::max(1, c.factorisations);
+}
+BENCHMARK(BM_Factorisation)
+    ->Args({0, 0})
+    ->Args({0, 1})
+    ->Args({1, 0})
+    ->Args({1, 1})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime()
+    ->Iterations(1)
+    ->Repetitions(3)
+    ->ReportAggregatesOnly(true);
+
+}  // namespace
+}  // namespace topotrack
+
+BENCHMARK_MAIN();

@@ -1,0 +1,94 @@
+// signed_distance and marching_cubes on closed meshes of 10k..400k vertices (the §4.3 topology step
+// runs both on the tracked mesh every frame). Input: a bumpy torus with about N vertices; the voxel size
+// is its mean edge length, so marching cubes returns a mesh of comparable size.
+#include <benchmark/benchmark.h>
+
+#include <cmath>
+#include <numbers>
+
+#include "kernels/gen/synthetic.hpp"
+#include "kernels/sdf/marching_cubes.hpp"
+#include "kernels/sdf/signed_distance.hpp"
+
+namespace topotrack {
+namespace {
+
+struct Input {
+  std::vector<Vec3> positions;
+  std::vector<std::array<Index, 3>> triangles;
+  double edge = 0;
+};
+
+Input bumpy_torus(std::int64_t vertices) {
+  const int m = std::max(8, int(std::sqrt(double(vertices) / 3.0)));
+  const int n = int(vertices / m);
+  Input in;
+  const double two_pi = 2 * std::numbers::pi;
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < m; ++j) {
+      const double u = two_pi * i / n, v = two_pi * j / m;
+      const double r = 0.35 + 0.03 * std::sin(7 * u) * std::sin(5 * v);
+      in.positions.emplace_back((1 + r * std::cos(v)) * std::cos(u), (1 + r * std::cos(v)) * std::sin(u), r * std::sin(v));
+    }
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < m; ++j) {
+      const Index a = Index(i * m + j), b = Index(((i + 1) % n) * m + j), c = Index(((i + 1) % n) * m + (j + 1) % m),
+                  d = Index(i * m + (j + 1) % m);
+      in.triangles.push_back({a, b, c});
+      in.triangles.push_back({a, c, d});
+    }
+  double sum = 0;
+  for (const auto& t : in.triangles) sum += (in.positions[t[0]] - in.positions[t[1]]).norm();
+  in.edge = sum / double(in.triangles.size());
+  return in;
+}
+
+void BM_SignedDistance(benchmark::State& state) {
+  const Input in = bumpy_torus(state.range(0));
+  std::size_t voxels = 0;
+  for (auto _ : state) {
+    auto grid = signed_distance(in.positions, in.triangles, in.edge);
+    voxels = grid->activeVoxelCount();
+    benchmark::DoNotOptimize(grid);
+  }
+  state.counters["vertices"] = double(in.positions.size());
+  state.counters["active_voxels"] = double(voxels);
+}
+
+void BM_MarchingCubes(benchmark::State& state) {
+  const Input in = bumpy_torus(state.range(0));
+  auto grid = signed_distance(in.positions, in.triangles, in.edge);
+  std::size_t out_vertices = 0;
+  for (auto _ : state) {
+    MeshData m = marching_cubes(*grid);
+    out_vertices = m.vertex_count();
+    benchmark::DoNotOptimize(m);
+  }
+  state.counters["vertices"] = double(in.positions.size());
+  state.counters["mc_vertices"] = double(out_vertices);
+}
+
+// One frame of the blobs sequence (field sampling + marching cubes) at 1x, 2x, 4x the default resolution.
+void BM_GenBlobsFrame(benchmark::State& state) {
+  SyntheticParams p;
+  p.kind = SyntheticKind::kBlobs;
+  p.frames = 60;
+  p.resolution = int(state.range(0));
+  const SyntheticScene scene(p);
+  std::size_t vertices = 0;
+  for (auto _ : state) {
+    MeshData m = scene.frame_mesh(7);
+    vertices = m.vertex_count();
+    benchmark::DoNotOptimize(m);
+  }
+  state.counters["mc_vertices"] = double(vertices);
+}
+
+BENCHMARK(BM_GenBlobsFrame)->Arg(96)->Arg(192)->Arg(384)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_SignedDistance)->Arg(10000)->Arg(40000)->Arg(100000)->Arg(400000)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_MarchingCubes)->Arg(10000)->Arg(40000)->Arg(100000)->Arg(400000)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+}  // namespace
+}  // namespace topotrack
+
+BENCHMARK_MAIN();

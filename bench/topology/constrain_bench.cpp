@@ -1,0 +1,73 @@
+// ConstrainTopology (§4.3) cost vs size: CalculateSignedDistance + classification + replacement, the work of
+// Algorithm 1 lines 8-9 (Θ = φ_M) and 10-11 (Θ = φ_S of the next frame), on `gen metaballs` frames whose
+// vertex count grows with the resolution. Voxel size = the mesh's mean edge length (the tracked mesh's
+// target edge length). Target (issue 5): 100k vertices in at most 0.4 s on 2 cores.
+//   constrain_bench --benchmark_format=json
+#include <benchmark/benchmark.h>
+
+#include <map>
+#include <memory>
+
+#include "kernels/gen/synthetic.hpp"
+#include "kernels/mesh/mesh_convert.hpp"
+#include "kernels/mesh/mesh_queries.hpp"
+#include "kernels/sdf/signed_distance.hpp"
+#include "kernels/topology/constrain.hpp"
+
+namespace topotrack {
+namespace {
+
+struct Pair {
+  SurfaceMesh mesh, next;
+  double voxel = 0;
+};
+
+// Frames 120 and 121 of a 240-frame metaballs scene (consecutive frames close together, as M and S_n are
+// after alignment; the balls are splitting apart there), at `resolution` voxels.
+const Pair& scene_pair(int resolution) {
+  static std::map<int, std::unique_ptr<Pair>> cache;
+  auto& p = cache[resolution];
+  if (!p) {
+    SyntheticParams sp;
+    sp.kind = SyntheticKind::kMetaballs;
+    sp.frames = 240;
+    sp.resolution = resolution;
+    const SyntheticScene scene(sp);
+    p = std::make_unique<Pair>();
+    p->mesh = to_surface_mesh(scene.frame_mesh(120));
+    p->next = to_surface_mesh(scene.frame_mesh(121));
+    p->voxel = mean_edge_length(p->mesh);
+  }
+  return *p;
+}
+
+void run(benchmark::State& state, bool self) {
+  const Pair& p = scene_pair(int(state.range(0)));
+  ConstrainReport r;
+  for (auto _ : state) {
+    state.PauseTiming();
+    SurfaceMesh m = p.mesh.clone();
+    state.ResumeTiming();
+    const openvdb::FloatGrid::Ptr theta = signed_distance(self ? m : p.next, p.voxel);
+    EventList events;
+    r = constrain_topology(m, *theta, {}, &events);
+    benchmark::DoNotOptimize(m.n_vertices());
+  }
+  state.counters["vertices"] = double(p.mesh.n_vertices());
+  state.counters["complex_cells"] = double(r.complex_cells);
+  state.counters["classify_s"] = r.seconds_classify;
+  state.counters["replace_s"] = r.seconds_replace;
+  state.counters["events_s"] = r.seconds_events;
+  state.counters["constrain_s"] = r.seconds_total;
+}
+
+void BM_ConstrainToNextFrame(benchmark::State& state) { run(state, false); }
+void BM_ConstrainSelf(benchmark::State& state) { run(state, true); }
+
+BENCHMARK(BM_ConstrainToNextFrame)->Arg(100)->Arg(200)->Arg(300)->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime()->UseRealTime();
+BENCHMARK(BM_ConstrainSelf)->Arg(100)->Arg(200)->Arg(300)->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime()->UseRealTime();
+
+}  // namespace
+}  // namespace topotrack
+
+BENCHMARK_MAIN();

@@ -1,0 +1,59 @@
+#pragma once
+//! Tracker parameters (Algorithm 1 and the stages it calls) and their JSON profiles (profiles/*.json).
+//! Every parameter has a dotted name ("coarse.alpha_reg_start"); a profile sets any subset of them, the
+//! command line overrides single ones with "name=value", and the parameters in effect are written next
+//! to the output. Defaults are the paper's values.
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "kernels/improve/improve.hpp"
+#include "kernels/registration/coarse.hpp"
+#include "kernels/registration/fine.hpp"
+#include "kernels/topology/constrain.hpp"
+
+namespace topotrack {
+
+struct TrackerParams {
+  //! Target edge length L of the tracked mesh (§4.1); <= 0: the mean edge length of the first input frame.
+  double edge_length = 0;
+  //! Voxel size of the signed distance grids of §4.3 as a multiple of L.
+  double voxel_size_factor = 1.0;
+  //! Narrow-band half width of the signed distance grids, in voxels.
+  double sdf_half_width = 3.0;
+
+  // Stages of Algorithm 1 that can be switched off for the ablations of §6 (Fig. 8 and 9).
+  bool coarse = true;            //!< line 5
+  bool fine = true;              //!< line 6
+  bool topology = true;          //!< lines 8-11
+  bool projection_only = false;  //!< replace lines 5-6 by projection onto the closest point (Fig. 9)
+
+  ImproveParams improve;
+  CoarseParams coarse_params;
+  FineParams fine_params;
+  ConstrainParams constrain;
+};
+
+//! The folder of the bundled profiles: $TOPOTRACK_PROFILES, else <source>/profiles, else the installed
+//! share/topotrack/profiles.
+std::filesystem::path profiles_directory();
+//! Names of the bundled profiles (file stems), sorted.
+std::vector<std::string> profile_names();
+
+//! Apply a profile: a JSON object whose keys are section names ("improve", "coarse", ...) holding
+//! parameter names, or dotted names at the top level. A "base" key names a profile applied first.
+//! \throw InvalidInput naming `origin` on an unknown parameter, a wrong type or an out-of-range value.
+void apply_profile(TrackerParams& params, const nlohmann::json& profile, const std::string& origin);
+//! Load `name_or_path` (a bundled profile name, or a .json file) on top of the defaults.
+//! \throw UsageError for an unknown name, IoError/InvalidInput for a bad file.
+TrackerParams load_profile(const std::string& name_or_path);
+//! Apply one "dotted.name=value" override. \throw UsageError naming the setting.
+void apply_setting(TrackerParams& params, const std::string& assignment);
+//! Every parameter, by section, as JSON (what `track` writes next to its output).
+nlohmann::json to_json(const TrackerParams& params);
+//! Check ranges across parameters. \throw InvalidInput naming the parameter.
+void validate(const TrackerParams& params);
+
+}  // namespace topotrack

@@ -1,0 +1,218 @@
+#include "engine/tracker.hpp"
+
+#include <chrono>
+
+#include "io/error.hpp"
+#include "kernels/mesh/mesh_convert.hpp"
+#include "kernels/mesh/mesh_queries.hpp"
+#include "kernels/propagate/propagate.hpp"
+#include "kernels/raycast/target_surface.hpp"
+#include "kernels/registration/projection.hpp"
+#include "kernels/sdf/marching_cubes.hpp"
+#include "kernels/sdf/signed_distance.hpp"
+
+namespace topotrack {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+
+//! Positions keyed by persistent id, to carry the previous frame's positions through the events.
+IdField positions_by_id(const SurfaceMesh& m) {
+  IdField f;
+  f.width = 3;
+  f.ids.reserve(m.n_vertices());
+  f.values.reserve(3 * m.n_vertices());
+  for (Index i = 0; i < m.vertices_size(); ++i) {
+    const Vertex v(i);
+    if (m.is_deleted(v)) continue;
+    f.ids.push_back(m.id(v));
+    for (int c = 0; c < 3; ++c) f.values.push_back(float(m.position(v)[c]));
+  }
+  return f;
+}
+
+}  // namespace
+
+struct Tracker::Impl {
+  TrackerParams params;
+  SurfaceMesh mesh;
+  EventList events;
+  std::vector<Vec3> velocities;
+  FrameReport report;
+  std::size_t frames = 0;
+  double edge_length = 0, voxel_size = 0;
+
+  ImproveParams improve_params() const {
+    ImproveParams p = params.improve;
+    p.target_edge_length = edge_length;
+    return p;
+  }
+
+  //! ImproveMesh(M) (§4.1), timed into the improve column.
+  void improve(EventList* ev) {
+    const auto t0 = Clock::now();
+    improve_mesh(mesh, improve_params(), ev);
+    report.seconds.improve += since(t0);
+  }
+
+  //! ConstrainTopology(M, Θ) (§4.3), timed into the topology column.
+  std::size_t constrain(const openvdb::FloatGrid& theta) {
+    const auto t0 = Clock::now();
+    const ConstrainReport r = constrain_topology(mesh, theta, params.constrain, &events);
+    report.seconds.topology += since(t0);
+    return r.complex_cells;
+  }
+
+  openvdb::FloatGrid::Ptr distance(const SurfaceMesh& m) {
+    const auto t0 = Clock::now();
+    auto grid = signed_distance(m, voxel_size, params.sdf_half_width);
+    report.seconds.signed_distance += since(t0);
+    return grid;
+  }
+
+  void first_frame(const SurfaceMesh& target) {
+    // Algorithm 1, lines 1-2: M = S_1, ImproveMesh(M). The events of this first improvement relate the
+    // input's triangulation to M, not two frames of M, so they are not part of any frame's list.
+    mesh = target.clone();
+    edge_length = params.edge_length > 0 ? params.edge_length : mean_edge_length(target);
+    if (!(edge_length > 0)) TT_THROW(InvalidInput, "the first frame has no edges to derive the edge length from");
+    voxel_size = params.voxel_size_factor * edge_length;
+    improve(nullptr);
+  }
+
+  void next_frame(const SurfaceMesh& target, const openvdb::FloatGrid* theta) {
+    const IdField before = positions_by_id(mesh);
+    if (mesh.n_faces() > 0 && target.n_faces() > 0) {
+      const TargetSurface surface = TargetSurface::from_mesh(target);
+      if (params.projection_only) {
+        const auto t0 = Clock::now();
+        project_to_closest(mesh, surface);
+        report.seconds.coarse += since(t0);
+      } else {
+        if (params.coarse) {  // line 5
+          const auto t0 = Clock::now();
+          report.coarse_iterations = align_coarse(mesh, surface, params.coarse_params).iterations;
+          report.seconds.coarse += since(t0);
+        }
+        if (params.fine) {  // line 6
+          const auto t0 = Clock::now();
+          report.fine_iterations = align_fine(mesh, surface, params.fine_params).cg_iterations;
+          report.seconds.fine += since(t0);
+        }
+      }
+    }
+    if (mesh.n_faces() > 0) improve(&events);  // line 7
+    if (params.topology) {
+      if (mesh.n_faces() > 0) report.complex_cells_self = constrain(*distance(mesh));  // lines 8-9
+      openvdb::FloatGrid::Ptr phi_s;                                                 // line 10
+      if (theta && std::abs(theta->voxelSize()[0] - voxel_size) <= 1e-9 * voxel_size) {
+        report.complex_cells_target = constrain(*theta);
+      } else {
+        report.complex_cells_target = constrain(*distance(target));  // line 11
+      }
+    }
+    if (mesh.n_faces() > 0) improve(&events);  // line 12
+
+    // Velocity of each vertex from the tracked motion: its position minus where the previous frame's
+    // surface point it stands for was (§4.6 forward propagation of positions).
+    const IdField carried = propagate_forward(events, before);
+    const IdTable table = IdTable::from_field(carried);
+    velocities.assign(mesh.vertices_size(), Vec3::Zero());
+    for (Index i = 0; i < mesh.vertices_size(); ++i) {
+      const Vertex v(i);
+      if (mesh.is_deleted(v)) continue;
+      const auto prev = table.get(mesh.id(v));
+      if (prev.size() == 3) velocities[i] = mesh.position(v) - Vec3(prev[0], prev[1], prev[2]);
+    }
+  }
+
+  //! Rebuild M from its triangle list so that its half-edge layout depends only on (positions, ids,
+  //! triangles): a run resumed from a checkpoint (which stores exactly those) then continues bit for bit
+  //! like an uninterrupted one, since the stages visit elements in index order.
+  void canonicalize() {
+    std::vector<Vec3> pos;
+    std::vector<std::array<Index, 3>> tris;
+    std::vector<Vertex> of;
+    extract_triangles(mesh, pos, tris, &of);
+    std::vector<VertexId> ids(of.size());
+    std::vector<Vec3> vel(of.size());
+    for (std::size_t i = 0; i < of.size(); ++i) {
+      ids[i] = mesh.id(of[i]);
+      vel[i] = velocities[of[i].idx];
+    }
+    const VertexId next = mesh.next_id();
+    mesh = SurfaceMesh::from_triangles(pos, tris, ids);
+    mesh.set_next_id(next);
+    velocities = std::move(vel);
+  }
+
+  const FrameReport& add(const SurfaceMesh& target, const openvdb::FloatGrid* theta) {
+    const auto t0 = Clock::now();
+    report = FrameReport{};
+    report.index = frames;
+    events.clear();
+    if (frames == 0 && mesh.n_faces() == 0) first_frame(target);
+    else next_frame(target, theta);
+    if (frames == 0 || velocities.size() != mesh.vertices_size()) velocities.assign(mesh.vertices_size(), Vec3::Zero());
+    canonicalize();
+    ++frames;
+    report.vertices = mesh.n_vertices();
+    report.triangles = mesh.n_faces();
+    report.components = connected_components(mesh);
+    report.euler = euler_characteristic(mesh);
+    report.events_by_kind = events.count_by_kind();
+    report.seconds.total = since(t0);
+    return report;
+  }
+};
+
+Tracker::Tracker(TrackerParams params) : impl_(std::make_unique<Impl>()) {
+  validate(params);
+  impl_->params = std::move(params);
+}
+Tracker::~Tracker() = default;
+Tracker::Tracker(Tracker&&) noexcept = default;
+Tracker& Tracker::operator=(Tracker&&) noexcept = default;
+
+const FrameReport& Tracker::add_frame(const SurfaceMesh& target, const std::string& name) {
+  try {
+    target.validate(/*require_closed=*/true);
+  } catch (const TopologyError& e) {
+    TT_THROW(InvalidInput, name << ": not a closed 2-manifold: " << e.what());
+  }
+  if (impl_->frames == 0 && target.n_faces() == 0) TT_THROW(InvalidInput, name << ": the first frame is empty");
+  return impl_->add(target, nullptr);
+}
+
+const FrameReport& Tracker::add_frame(const openvdb::FloatGrid& target, const std::string& name) {
+  SurfaceMesh surface;
+  try {
+    surface = to_surface_mesh(marching_cubes(target));
+  } catch (const InvalidInput& e) {
+    TT_THROW(InvalidInput, name << ": " << e.what());
+  }
+  if (impl_->frames == 0) return add_frame(surface, name);
+  return impl_->add(surface, &target);
+}
+
+const SurfaceMesh& Tracker::mesh() const { return impl_->mesh; }
+const EventList& Tracker::events() const { return impl_->events; }
+const std::vector<Vec3>& Tracker::velocities() const { return impl_->velocities; }
+const FrameReport& Tracker::report() const { return impl_->report; }
+const TrackerParams& Tracker::params() const { return impl_->params; }
+std::size_t Tracker::frames() const { return impl_->frames; }
+double Tracker::edge_length() const { return impl_->edge_length; }
+double Tracker::voxel_size() const { return impl_->voxel_size; }
+
+void Tracker::restore(SurfaceMesh mesh, std::size_t frames_done, double edge_length, double voxel_size) {
+  impl_->mesh = std::move(mesh);
+  impl_->frames = frames_done;
+  impl_->edge_length = edge_length;
+  impl_->voxel_size = voxel_size;
+  impl_->events.clear();
+  impl_->velocities.assign(impl_->mesh.vertices_size(), Vec3::Zero());
+  impl_->canonicalize();
+}
+
+}  // namespace topotrack

@@ -1,0 +1,74 @@
+#pragma once
+//! The tracker: Algorithm 1 of the paper, fed one frame at a time. No files: a simulation post-processor
+//! hands it each frame's closed surface (a mesh, or an OpenVDB level set straight from the simulation) and
+//! gets back the tracked mesh M and that frame's event list. Memory is independent of the sequence length
+//! (pairwise work only, §6).
+#include <openvdb/openvdb.h>
+
+#include <memory>
+#include <string>
+
+#include "engine/profile.hpp"
+#include "io/event_list.hpp"
+#include "kernels/mesh/surface_mesh.hpp"
+
+namespace topotrack {
+
+//! Seconds spent per stage on one frame: the columns of the paper's Table 1 (I/O is the caller's).
+struct StageSeconds {
+  double coarse = 0, fine = 0, improve = 0, signed_distance = 0, topology = 0, total = 0;
+};
+
+//! What one call of Tracker::add_frame did.
+struct FrameReport {
+  std::size_t index = 0;  //!< 0 for the first frame given to this tracker's sequence
+  std::size_t vertices = 0, triangles = 0;
+  std::size_t components = 0;
+  long euler = 0;
+  std::vector<std::size_t> events_by_kind;  //!< indexed by int(EventKind) - 1
+  std::size_t complex_cells_self = 0, complex_cells_target = 0;  //!< ConstrainTopology(M, φ_M) and (M, φ_S)
+  int coarse_iterations = 0, fine_iterations = 0;
+  StageSeconds seconds;
+};
+
+class Tracker {
+public:
+  //! \throw InvalidInput on inconsistent parameters.
+  explicit Tracker(TrackerParams params = {});
+  ~Tracker();
+  Tracker(Tracker&&) noexcept;
+  Tracker& operator=(Tracker&&) noexcept;
+
+  //! Track the next frame S_n (Algorithm 1, lines 4-14; for the first frame lines 1-2).
+  //! \pre target is a closed 2-manifold (validate() passes). \throw InvalidInput if not, naming `name`.
+  const FrameReport& add_frame(const SurfaceMesh& target, const std::string& name = "frame");
+  //! Same with S_n given as a narrow-band level set (negative inside); it is used directly as φ_S when its
+  //! voxel size matches the tracker's, and its zero set (marching cubes) as the surface for alignment.
+  const FrameReport& add_frame(const openvdb::FloatGrid& target, const std::string& name = "frame");
+
+  //! The tracked mesh M after the last add_frame (compacted; ids are the persistent vertex ids).
+  const SurfaceMesh& mesh() const;
+  //! The event list of the last add_frame (§4.4): it takes M of the previous frame to M of this one.
+  //! Empty for the first frame.
+  const EventList& events() const;
+  //! Per vertex of mesh(), the motion since the previous frame (position minus the previous frame's
+  //! position propagated through events(), §4.6): per-frame velocity for motion blur. Zero on the first frame.
+  const std::vector<Vec3>& velocities() const;
+  const FrameReport& report() const;
+  const TrackerParams& params() const;
+  //! Frames tracked so far.
+  std::size_t frames() const;
+  //! L and the voxel size in effect (fixed by the first frame when edge_length is 0).
+  double edge_length() const;
+  double voxel_size() const;
+
+  //! Resume from a saved state: M and the fixed scalars (see engine/checkpoint.hpp); the next add_frame
+  //! continues exactly as an uninterrupted run would.
+  void restore(SurfaceMesh mesh, std::size_t frames_done, double edge_length, double voxel_size);
+
+private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace topotrack

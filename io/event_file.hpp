@@ -1,0 +1,23 @@
+#pragma once
+//! The binary event-list file (§4.4), documented in docs/formats.md: a header with magic and version,
+//! counts, then the records.
+#include <filesystem>
+#include <string>
+#include <string_view>
+
+#include "io/event_list.hpp"
+
+namespace topotrack {
+
+//! The file bytes. \throw InvalidInput on a non-finite rule weight (it could not be read back).
+std::string encode_events(const EventList& events);
+//! \throw InvalidInput "<name>: byte <offset>: <fault>" on a bad magic, unsupported version, truncation,
+//! lying counts, unknown event kind, non-finite weight or trailing bytes.
+EventList decode_events(std::string_view bytes, const std::string& name);
+
+//! Atomic write. \throw IoError naming the path; InvalidInput as encode_events.
+void write_events(const std::filesystem::path& path, const EventList& events);
+//! Memory-mapped read. \throw IoError (unreadable) or InvalidInput (corrupt), naming the path.
+EventList read_events(const std::filesystem::path& path);
+
+}  // namespace topotrack

@@ -1,0 +1,614 @@
+#include "kernels/improve/improve.hpp"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <utility>
+
+#include "kernels/improve/improve_geometry.hpp"
+
+namespace topotrack {
+namespace {
+
+using namespace improve_detail;
+using Clock = std::chrono::steady_clock;
+
+double since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+
+constexpr double kPi = 3.14159265358979323846;
+constexpr double kDegToRad = kPi / 180.0;
+// A new triangle whose smallest angle is below about 0.06° counts as degenerate whatever the old ones were.
+constexpr double kDegenerateQuality = 1e-3;
+// A collapse of a short edge may leave edges up to this factor above L_max (the next round splits them):
+// on iso-surface meshes short edges often sit next to nearly maximal ones, and refusing leaves them.
+constexpr double kShortCollapseStretch = 1.25;
+// ... and may create an angle below min_angle only above this fraction of it (or better than before).
+constexpr double kShortCollapseAngleFloor = 0.2;
+
+template <class F>
+void parallel_over(std::size_t n, F&& f) {
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4096), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t i = r.begin(); i != r.end(); ++i) f(i);
+  });
+}
+
+//! Candidates (key, index), processed in increasing key order, ties by the smaller index.
+using Candidates = std::vector<std::pair<double, Index>>;
+
+enum EdgeFlag : std::uint8_t { kLong = 1, kShort = 2, kFold = 4 };
+
+//! Why an edge is collapsed, which decides what the collapse may do to the triangles (§4.1).
+enum class CollapseMode {
+  Short,    //!< shorter than L_min: must not create a new bad angle (or only a mildly bad one)
+  Improve,  //!< edge of a triangle with a small angle: must raise the smallest angle around
+  Fold,     //!< across a small dihedral angle: removes the fold, exempt from the deviation bound
+};
+
+//! The candidates of one round, found by a parallel scan.
+struct Survey {
+  Candidates long_edges, short_edges, bad_faces, folds;
+  bool empty() const { return long_edges.empty() && short_edges.empty() && bad_faces.empty() && folds.empty(); }
+};
+
+class Improver {
+public:
+  Improver(SurfaceMesh& mesh, const ImproveParams& params, EventList* events, ImproveReport& report)
+      : m_(mesh), p_(params), events_(events), rep_(report) {}
+
+  void run(double L) {
+    lmin_ = L / std::sqrt(p_.ratio);
+    lmax_ = L * std::sqrt(p_.ratio);
+    lmin2_ = lmin_ * lmin_;
+    lmax2_ = lmax_ * lmax_;
+    max_dev_ = p_.max_surface_deviation * L;
+    q_min_ = std::sin(p_.min_angle_deg * kDegToRad);
+    q_floor_ = std::sin(kShortCollapseAngleFloor * p_.min_angle_deg * kDegToRad);
+    lmax_short2_ = lmax2_ * kShortCollapseStretch * kShortCollapseStretch;
+    cos_fold_ = std::cos((180.0 - p_.min_dihedral_deg) * kDegToRad);
+    cos_flip_bend_ = std::cos(p_.max_flip_bend_deg * kDegToRad);
+    rep_.min_edge_length = lmin_;
+    rep_.max_edge_length = lmax_;
+    Survey s;
+    for (int it = 0; it < p_.max_iterations; ++it) {
+      auto t0 = Clock::now();
+      // After a busy round the parallel full scan is cheaper than gathering the touched neighbourhoods.
+      if (it == 0 || touched_.size() > m_.vertices_size() / 8)
+        survey_all(s);
+      else
+        survey_touched(s);
+      rep_.seconds_scan += since(t0);
+      if (s.empty()) break;
+      if (dev_.empty()) dev_.assign(m_.vertices_size(), 0.0);
+      rep_.iterations = it + 1;
+      std::size_t ops = 0;
+      t0 = Clock::now();
+      ops += short_edge_pass(s.short_edges);
+      rep_.seconds_collapse += since(t0);
+      t0 = Clock::now();
+      ops += split_pass(s.long_edges);
+      rep_.seconds_split += since(t0);
+      t0 = Clock::now();
+      ops += bad_triangle_pass(s.bad_faces);
+      rep_.seconds_bad_triangles += since(t0);
+      t0 = Clock::now();
+      ops += fold_pass(s.folds);
+      rep_.seconds_folds += since(t0);
+      if (ops == 0) break;
+    }
+  }
+
+private:
+  const Vec3& pos(Vertex v) const { return m_.position(v); }
+  double length2(Edge e) const { return (pos(m_.vertex(e, 0)) - pos(m_.vertex(e, 1))).squaredNorm(); }
+  Vec3 area_vector(Face f) const {
+    const auto t = m_.vertices(f);
+    return (pos(t[1]) - pos(t[0])).cross(pos(t[2]) - pos(t[0]));
+  }
+  double quality(Face f) const {
+    const auto t = m_.vertices(f);
+    return triangle_quality(pos(t[0]), pos(t[1]), pos(t[2]));
+  }
+  //! Normals more than 180° - min_dihedral apart (degenerate faces have no normal and fold nothing).
+  bool normals_fold(const Vec3& n0, const Vec3& n1) const {
+    return n0.squaredNorm() > 0 && n1.squaredNorm() > 0 && !normals_within(n0, n1, cos_fold_);
+  }
+  bool is_fold(Edge e) const {
+    return normals_fold(area_vector(m_.face(m_.halfedge(e, 0))), area_vector(m_.face(m_.halfedge(e, 1))));
+  }
+  void after_operation() {
+    if (p_.validate_each_step) m_.validate();
+  }
+
+  // Survey ---------------------------------------------------------------------------------------
+  //! Byte flags only, so a survey of a large mesh touches little fresh memory; keys are recomputed for
+  //! the few flagged elements when they are collected.
+  void measure_face(Index i) {
+    const Face f(i);
+    fbad_[i] = !m_.is_deleted(f) && quality(f) < q_min_;
+  }
+  void measure_edge(Index i) {
+    const Edge e(i);
+    if (m_.is_deleted(e)) {
+      eflag_[i] = 0;
+      return;
+    }
+    const Halfedge h0 = m_.halfedge(e, 0), h1 = m_.halfedge(e, 1);
+    const Vec3 &a = pos(m_.to_vertex(h1)), &b = pos(m_.to_vertex(h0));
+    const Vec3 &c = pos(m_.to_vertex(m_.next(h0))), &d = pos(m_.to_vertex(m_.next(h1)));
+    const Vec3 ab = b - a;
+    const double l2 = ab.squaredNorm();
+    std::uint8_t flag = l2 > lmax2_ ? kLong : (l2 < lmin2_ ? kShort : 0);
+    // Faces (a, b, c) and (b, a, d).
+    if (normals_fold(ab.cross(c - a), (d - a).cross(ab))) flag |= kFold;
+    eflag_[i] = flag;
+  }
+  void resize_survey_arrays() {
+    fbad_.resize(m_.faces_size());
+    eflag_.resize(m_.edges_size());
+  }
+  void add_edge_candidate(Survey& s, Index e) const {
+    const std::uint8_t flag = eflag_[e];
+    if (!flag) return;
+    const double l2 = length2(Edge(e));
+    if (flag & kLong) s.long_edges.emplace_back(-l2, e);  // longest first
+    if (flag & kShort) s.short_edges.emplace_back(l2, e);  // shortest first
+    if (flag & kFold) s.folds.emplace_back(0.0, e);        // by index
+  }
+  void add_face_candidate(Survey& s, Index f) const {
+    if (fbad_[f]) s.bad_faces.emplace_back(quality(Face(f)), f);  // worst first
+  }
+  static void clear_survey(Survey& s) {
+    for (Candidates* c : {&s.long_edges, &s.short_edges, &s.bad_faces, &s.folds}) c->clear();
+  }
+  static void sort_survey(Survey& s) {
+    for (Candidates* c : {&s.long_edges, &s.short_edges, &s.bad_faces, &s.folds}) std::sort(c->begin(), c->end());
+  }
+
+  //! One parallel pass over all faces (normal, quality) and one over all edges (length, fold); the
+  //! candidate lists are collected and sorted serially, so their order never depends on the thread count.
+  void survey_all(Survey& s) {
+    clear_survey(s);
+    for (const Index v : touched_) vtouched_[v] = 0;
+    touched_.clear();
+    resize_survey_arrays();
+    parallel_over(m_.faces_size(), [&](std::size_t i) { measure_face(static_cast<Index>(i)); });
+    parallel_over(m_.edges_size(), [&](std::size_t i) { measure_edge(static_cast<Index>(i)); });
+    for (Index e = 0; e < m_.edges_size(); ++e) add_edge_candidate(s, e);
+    for (Index f = 0; f < m_.faces_size(); ++f) add_face_candidate(s, f);
+    sort_survey(s);
+  }
+
+  //! The same over the faces and edges around the vertices that the last round touched: elsewhere nothing
+  //! changed, so what could not be fixed there still cannot.
+  void survey_touched(Survey& s) {
+    clear_survey(s);
+    resize_survey_arrays();
+    estamp_.resize(m_.edges_size(), 0);
+    fstamp_.resize(m_.faces_size(), 0);
+    ++stamp_;
+    local_edges_.clear();
+    local_faces_.clear();
+    for (const Index vi : touched_) {
+      vtouched_[vi] = 0;
+      const Vertex v(vi);
+      if (m_.is_deleted(v) || m_.is_isolated(v)) continue;
+      const Halfedge g0 = m_.halfedge(v);
+      Halfedge g = g0;
+      do {
+        const Index e = SurfaceMesh::edge(g).idx, f = m_.face(g).idx;
+        if (estamp_[e] != stamp_) {
+          estamp_[e] = stamp_;
+          local_edges_.push_back(e);
+        }
+        if (f != kInvalidIndex && fstamp_[f] != stamp_) {
+          fstamp_[f] = stamp_;
+          local_faces_.push_back(f);
+        }
+        g = m_.ccw_rotated(g);
+      } while (g != g0);
+    }
+    touched_.clear();
+    parallel_over(local_faces_.size(), [&](std::size_t i) { measure_face(local_faces_[i]); });
+    parallel_over(local_edges_.size(), [&](std::size_t i) { measure_edge(local_edges_[i]); });
+    for (const Index e : local_edges_) add_edge_candidate(s, e);
+    for (const Index f : local_faces_) add_face_candidate(s, f);
+    sort_survey(s);
+  }
+
+  void touch(Vertex v) {
+    if (vtouched_.size() < m_.vertices_size()) vtouched_.resize(m_.vertices_size(), 0);
+    if (vtouched_[v.idx]) return;
+    vtouched_[v.idx] = 1;
+    touched_.push_back(v.idx);
+  }
+  void touch_ring(Vertex v) {
+    touch(v);
+    const Halfedge g0 = m_.halfedge(v);
+    Halfedge g = g0;
+    do {
+      touch(m_.to_vertex(g));
+      g = m_.ccw_rotated(g);
+    } while (g != g0);
+  }
+
+  // Splits ---------------------------------------------------------------------------------------
+  std::size_t split_pass(const Candidates& c) {
+    std::size_t n = 0;
+    for (const auto& [key, ei] : c) {
+      const Edge e(ei);
+      if (m_.is_deleted(e) || length2(e) <= lmax2_) continue;
+      const Vertex v0 = m_.vertex(e, 0), v1 = m_.vertex(e, 1);
+      const Vertex k = m_.split(e, 0.5 * (pos(v0) + pos(v1)), 0.5);
+      if (events_) events_->record_split(m_.id(v0), m_.id(v1), m_.id(k), 0.5);
+      dev_.resize(m_.vertices_size(), 0.0);
+      dev_[k.idx] = std::max(dev_[v0.idx], dev_[v1.idx]);
+      touch_ring(k);
+      ++n;
+      after_operation();
+    }
+    rep_.splits += n;
+    return n;
+  }
+
+  // Collapses ------------------------------------------------------------------------------------
+  //! A triangle around the collapsing edge that survives it: (v, w1, w2) becomes (p, w1, w2).
+  struct RingFace {
+    Vertex v, w1, w2;
+    Halfedge outer;  // w2 -> w1, in the unchanged face across (w1, w2)
+    Vec3 n_old, n_new;
+  };
+
+  std::size_t valence(Vertex v) const {
+    std::size_t n = 0;
+    const Halfedge g0 = m_.halfedge(v);
+    Halfedge g = g0;
+    do {
+      ++n;
+      g = m_.ccw_rotated(g);
+    } while (g != g0);
+    return n;
+  }
+
+  //! SurfaceMesh::is_collapse_ok for an interior edge in O(valence) with vertex stamps: the opposite
+  //! corners differ and keep valence >= 3, the one-rings of the end points share only them (link
+  //! condition) and the merged vertex keeps valence >= 3. Symmetric in the two directions.
+  bool collapse_topology_ok(Halfedge h) {
+    blocked_by_valence3_ = false;
+    const Halfedge o = SurfaceMesh::opposite(h);
+    if (m_.is_boundary(h) || m_.is_boundary(o)) return m_.is_collapse_ok(h);
+    const Vertex a = m_.to_vertex(o), b = m_.to_vertex(h);
+    const Vertex vl = m_.to_vertex(m_.next(h)), vr = m_.to_vertex(m_.next(o));
+    if (vl == vr) return false;
+    const std::size_t val_l = valence(vl), val_r = valence(vr);
+    if (val_l <= 3 || val_r <= 3) {
+      blocked_by_valence3_ = val_l == 3 || val_r == 3;
+      return false;
+    }
+    if (vstamp_.size() < m_.vertices_size()) vstamp_.resize(m_.vertices_size(), 0);
+    ++vstamp_counter_;
+    std::size_t val_a = 0, val_b = 0;
+    Halfedge g = m_.halfedge(b);
+    const Halfedge gb = g;
+    do {
+      vstamp_[m_.to_vertex(g).idx] = vstamp_counter_;
+      ++val_b;
+      g = m_.ccw_rotated(g);
+    } while (g != gb);
+    g = m_.halfedge(a);
+    const Halfedge ga = g;
+    do {
+      const Vertex w = m_.to_vertex(g);
+      if (w != b && w != vl && w != vr && vstamp_[w.idx] == vstamp_counter_) return false;
+      ++val_a;
+      g = m_.ccw_rotated(g);
+    } while (g != ga);
+    return val_a + val_b >= 7;
+  }
+
+  //! Collapse e into its midpoint (§4.1, §4.4) if that keeps a closed 2-manifold without fold-over,
+  //! zero-area triangle, new fold, edge longer than L_max or excess surface movement, and if the
+  //! triangles get better as `mode` demands.
+  bool try_collapse(Edge e, CollapseMode mode) {
+    const Halfedge h = m_.halfedge(e, 0);
+    if (!collapse_topology_ok(h)) return false;
+    const Vertex a = m_.from_vertex(h), b = m_.to_vertex(h);
+    const Vec3 p = 0.5 * (pos(a) + pos(b));
+    const Face f0 = m_.face(h), f1 = m_.face(SurfaceMesh::opposite(h));
+    // The two faces that vanish: (a, b, vl) and (b, a, vr).
+    const Vec3 &pa = pos(a), &pb = pos(b);
+    const Vec3 &pl = pos(m_.to_vertex(m_.next(h))), &pr = pos(m_.to_vertex(m_.next(SurfaceMesh::opposite(h))));
+    double old_q = std::min(triangle_quality(pa, pb, pl), triangle_quality(pb, pa, pr));
+    Vec3 n_ref = (pb - pa).cross(pl - pa) + (pa - pb).cross(pr - pb);
+    ring_.clear();
+    for (const Vertex v : {a, b}) {
+      const Halfedge g0 = m_.halfedge(v);
+      Halfedge g = g0;
+      do {
+        const Face f = m_.face(g);
+        if (f != f0 && f != f1) {
+          const Halfedge gn = m_.next(g);
+          RingFace r{v, m_.to_vertex(g), m_.to_vertex(gn), SurfaceMesh::opposite(gn), {}, {}};
+          const Vec3 &q = pos(v), &q1 = pos(r.w1), &q2 = pos(r.w2);
+          if ((q1 - p).squaredNorm() > (mode == CollapseMode::Short ? lmax_short2_ : lmax2_)) return false;
+          r.n_old = (q1 - q).cross(q2 - q);
+          r.n_new = (q1 - p).cross(q2 - p);
+          n_ref += r.n_old;
+          old_q = std::min(old_q, triangle_quality(q, q1, q2));
+          ring_.push_back(r);
+        }
+        g = m_.ccw_rotated(g);
+      } while (g != g0);
+    }
+    double new_q = 1, dev_local = 0;
+    for (const RingFace& r : ring_) {
+      const double ln_new = r.n_new.norm();
+      if (!(ln_new > 0)) return false;
+      const double ln_old = r.n_old.norm();
+      // A degenerate old face has no normal to compare with; around a fold the old normals are what is
+      // wrong, and the checks for new folds below judge the result instead.
+      if (ln_old > 0 && mode != CollapseMode::Fold) {
+        if (r.n_old.dot(r.n_new) <= 0) return false;  // fold-over
+        dev_local = std::max(dev_local, std::abs((p - pos(r.v)).dot(r.n_old)) / ln_old);
+      }
+      if (mode != CollapseMode::Fold && r.n_new.dot(n_ref) <= 0) return false;
+      dev_local = std::max(dev_local, std::abs((pos(r.v) - p).dot(r.n_new)) / ln_new);
+      // In a cluster of short edges the needles around it get worse until their own short edge goes:
+      // a Short collapse judges only the triangles it leaves without a short edge.
+      const Vec3 &q1 = pos(r.w1), &q2 = pos(r.w2);
+      if (mode == CollapseMode::Short && std::min({(q1 - p).squaredNorm(), (q2 - p).squaredNorm(),
+                                                   (q2 - q1).squaredNorm()}) < lmin2_)
+        continue;
+      new_q = std::min(new_q, triangle_quality(p, q1, q2));
+    }
+    if (!(new_q > kDegenerateQuality)) return false;
+    switch (mode) {
+      case CollapseMode::Short:
+        if (new_q < q_min_ && new_q < old_q && new_q < q_floor_) return false;
+        break;
+      case CollapseMode::Improve:
+        if (!(new_q > old_q)) return false;
+        break;
+      case CollapseMode::Fold:
+        break;
+    }
+    // No new fold: across the new spokes (p, w2) and the ring edges (w1, w2).
+    for (const RingFace& r : ring_) {
+      for (const RingFace& s : ring_)
+        if (s.w1 == r.w2 && normals_fold(r.n_new, s.n_new)) return false;
+      const Vertex x = m_.to_vertex(m_.next(r.outer));
+      const Vec3 n_out = (pos(r.w1) - pos(r.w2)).cross(pos(x) - pos(r.w2));
+      if (normals_fold(r.n_new, n_out)) return false;
+    }
+    const double dev_new = std::max(dev_[a.idx], dev_[b.idx]) + dev_local;
+    if (mode != CollapseMode::Fold && dev_new > max_dev_) return false;
+    const VertexId k = m_.take_fresh_id();
+    if (events_) events_->record_collapse(m_.id(a), m_.id(b), k);
+    m_.collapse(h, p);
+    m_.set_id(b, k);
+    dev_[b.idx] = dev_new;
+    touch_ring(b);
+    ++rep_.collapses;
+    after_operation();
+    return true;
+  }
+
+  //! An opposite corner of valence 3 blocks a collapse of e (it would become a loop): collapse that
+  //! vertex into a neighbour first (its shortest edge that can go), then e if it is still there.
+  std::size_t collapse_unblocking(Edge e, CollapseMode mode) {
+    const Halfedge h = m_.halfedge(e, 0);
+    for (const Halfedge side : {h, SurfaceMesh::opposite(h)}) {
+      const Vertex corner = m_.to_vertex(m_.next(side));
+      if (m_.valence(corner) != 3) continue;
+      const Vertex a = m_.from_vertex(h), b = m_.to_vertex(h);
+      std::array<std::pair<double, Edge>, 3> spokes;
+      int k = 0;
+      const Halfedge g0 = m_.halfedge(corner);
+      Halfedge g = g0;
+      do {
+        spokes[k++] = {length2(SurfaceMesh::edge(g)), SurfaceMesh::edge(g)};
+        g = m_.ccw_rotated(g);
+      } while (g != g0 && k < 3);
+      std::sort(spokes.begin(), spokes.end());
+      for (const auto& [l2, spoke] : spokes) {
+        if (!try_collapse(spoke, CollapseMode::Short)) continue;
+        if (m_.is_deleted(a) || m_.is_deleted(b)) return 1;
+        const Halfedge ab = m_.find_halfedge(a, b);
+        return 1 + (ab.is_valid() && try_collapse(SurfaceMesh::edge(ab), mode));
+      }
+    }
+    return 0;
+  }
+
+  std::size_t collapse_or_unblock(Edge e, CollapseMode mode) {
+    if (try_collapse(e, mode)) return 1;
+    return blocked_by_valence3_ ? collapse_unblocking(e, mode) : 0;
+  }
+
+  std::size_t short_edge_pass(const Candidates& c) {
+    std::size_t n = 0;
+    for (const auto& [key, ei] : c) {
+      const Edge e(ei);
+      if (m_.is_deleted(e) || length2(e) >= lmin2_) continue;
+      n += collapse_or_unblock(e, CollapseMode::Short);
+    }
+    return n;
+  }
+
+  // Bad triangles: flip where flat, else collapse ------------------------------------------------
+  //! Flip e (§7) if the two faces are nearly coplanar, the new edge is within [L_min, L_max], the flip
+  //! moves the surface little, creates no fold and strictly raises the smallest angle of the pair.
+  bool try_flip(Edge e) {
+    if (!m_.is_flip_ok(e)) return false;
+    const Halfedge h0 = m_.halfedge(e, 0), h1 = m_.halfedge(e, 1);
+    const Vertex a = m_.from_vertex(h0), b = m_.to_vertex(h0);
+    const Vertex c = m_.to_vertex(m_.next(h0)), d = m_.to_vertex(m_.next(h1));
+    const Vec3 &pa = pos(a), &pb = pos(b), &pc = pos(c), &pd = pos(d);
+    const double l2 = (pc - pd).squaredNorm();
+    if (l2 > lmax2_ || l2 < lmin2_) return false;
+    // Old faces (a,b,c), (b,a,d); new faces (c,a,d), (d,b,c).
+    const Vec3 n0 = (pb - pa).cross(pc - pa), n1 = (pa - pb).cross(pd - pb);
+    const Vec3 m0 = (pa - pc).cross(pd - pc), m1 = (pb - pd).cross(pc - pd);
+    if (!normals_within(n0, n1, cos_flip_bend_) || !normals_within(m0, m1, cos_flip_bend_)) return false;
+    for (const Vec3* n : {&n0, &n1})
+      for (const Vec3* q : {&m0, &m1})
+        if (n->dot(*q) <= 0) return false;
+    const double old_q = std::min(triangle_quality(pa, pb, pc), triangle_quality(pb, pa, pd));
+    const double new_q = std::min(triangle_quality(pc, pa, pd), triangle_quality(pd, pb, pc));
+    if (!(new_q > old_q)) return false;
+    // The outer edges (b,c), (c,a), (a,d), (d,b) change one face each: no new fold there.
+    const Halfedge outer[4] = {m_.next(h0), m_.next(m_.next(h0)), m_.next(h1), m_.next(m_.next(h1))};
+    const Vec3* new_normal[4] = {&m1, &m0, &m0, &m1};
+    for (int k = 0; k < 4; ++k) {
+      const Halfedge o = SurfaceMesh::opposite(outer[k]);
+      if (normals_fold(*new_normal[k], area_vector(m_.face(o)))) return false;
+    }
+    const double dev_new =
+        std::max({dev_[a.idx], dev_[b.idx], dev_[c.idx], dev_[d.idx]}) + segment_distance(pa, pb, pc, pd);
+    if (dev_new > max_dev_) return false;
+    m_.flip(e);
+    for (const Vertex v : {a, b, c, d}) {
+      dev_[v.idx] = std::max(dev_[v.idx], dev_new);
+      touch(v);
+    }
+    ++rep_.flips;
+    after_operation();
+    return true;
+  }
+
+  bool fix_bad_triangle(Face f) {
+    std::array<std::pair<double, Edge>, 3> edges;
+    Halfedge h = m_.halfedge(f);
+    for (int k = 0; k < 3; ++k, h = m_.next(h)) {
+      const Edge e = SurfaceMesh::edge(h);
+      edges[k] = {length2(e), e};
+    }
+    std::sort(edges.begin(), edges.end());
+    if (p_.enable_flips)
+      for (int k = 2; k >= 0; --k)
+        if (try_flip(edges[k].second)) return true;
+    for (const auto& [len, e] : edges)
+      if (collapse_or_unblock(e, CollapseMode::Improve)) return true;
+    return false;
+  }
+
+  std::size_t bad_triangle_pass(const Candidates& c) {
+    std::size_t n = 0;
+    for (const auto& [key, fi] : c) {
+      const Face f(fi);
+      if (m_.is_deleted(f) || quality(f) >= q_min_) continue;
+      n += fix_bad_triangle(f);
+    }
+    return n;
+  }
+
+  // Folds ----------------------------------------------------------------------------------------
+  //! Collapse the folded edge, or else another edge of its two faces (§4.1).
+  std::size_t fold_pass(const Candidates& c) {
+    std::size_t n = 0;
+    for (const auto& [key, ei] : c) {
+      const Edge e(ei);
+      if (m_.is_deleted(e) || !is_fold(e)) continue;
+      std::array<Edge, 5> edges;
+      edges[0] = e;
+      int k = 1;
+      for (const Halfedge h : {m_.halfedge(e, 0), m_.halfedge(e, 1)}) {
+        edges[k++] = SurfaceMesh::edge(m_.next(h));
+        edges[k++] = SurfaceMesh::edge(m_.prev(h));
+      }
+      for (const Edge x : edges)
+        if (collapse_or_unblock(x, CollapseMode::Fold)) {
+          ++n;
+          break;
+        }
+    }
+    return n;
+  }
+
+  SurfaceMesh& m_;
+  const ImproveParams& p_;
+  EventList* events_;
+  ImproveReport& rep_;
+  double lmax_short2_ = 0;
+  double lmin_ = 0, lmax_ = 0, lmin2_ = 0, lmax2_ = 0, max_dev_ = 0;
+  double q_min_ = 0, q_floor_ = 0, cos_fold_ = 0, cos_flip_bend_ = 1;
+  std::vector<double> dev_;  // accumulated bound of the surface movement near each vertex
+  std::vector<std::uint8_t> fbad_;  // survey: face with a small angle
+  std::vector<std::uint8_t> eflag_;
+  std::vector<RingFace> ring_;
+  std::vector<Index> touched_, local_edges_, local_faces_;
+  std::vector<std::uint8_t> vtouched_;
+  std::vector<std::uint32_t> estamp_, fstamp_;
+  std::uint32_t stamp_ = 0;
+  std::vector<std::uint32_t> vstamp_;
+  std::uint32_t vstamp_counter_ = 0;
+  bool blocked_by_valence3_ = false;
+};
+
+void check_params(const ImproveParams& params) {
+  if (!(params.ratio > 1)) TT_THROW(InvalidInput, "improve_mesh: ratio must be > 1, got " << params.ratio);
+  if (!(params.min_angle_deg >= 0 && params.min_angle_deg < 60))
+    TT_THROW(InvalidInput, "improve_mesh: min_angle_deg must be in [0, 60), got " << params.min_angle_deg);
+  if (!(params.min_dihedral_deg >= 0 && params.min_dihedral_deg < 180))
+    TT_THROW(InvalidInput, "improve_mesh: min_dihedral_deg must be in [0, 180), got " << params.min_dihedral_deg);
+  if (params.max_iterations < 0)
+    TT_THROW(InvalidInput, "improve_mesh: max_iterations must be >= 0, got " << params.max_iterations);
+  if (!(params.max_surface_deviation >= 0))
+    TT_THROW(InvalidInput, "improve_mesh: max_surface_deviation must be >= 0, got " << params.max_surface_deviation);
+  if (!(params.max_flip_bend_deg >= 0 && params.max_flip_bend_deg <= 180))
+    TT_THROW(InvalidInput, "improve_mesh: max_flip_bend_deg must be in [0, 180], got " << params.max_flip_bend_deg);
+  if (!std::isfinite(params.target_edge_length))
+    TT_THROW(InvalidInput, "improve_mesh: target_edge_length must be finite");
+}
+
+}  // namespace
+
+double mean_edge_length_parallel(const SurfaceMesh& mesh) {
+  constexpr std::size_t kChunk = 8192;
+  const std::size_t ne = mesh.edges_size(), chunks = (ne + kChunk - 1) / kChunk;
+  std::vector<double> sum(chunks, 0.0);
+  std::vector<std::size_t> count(chunks, 0);
+  tbb::parallel_for(std::size_t(0), chunks, [&](std::size_t c) {
+    double s = 0;
+    std::size_t n = 0;
+    for (std::size_t i = c * kChunk, end = std::min(ne, i + kChunk); i < end; ++i) {
+      const Edge e(static_cast<Index>(i));
+      if (mesh.is_deleted(e)) continue;
+      s += (mesh.position(mesh.vertex(e, 0)) - mesh.position(mesh.vertex(e, 1))).norm();
+      ++n;
+    }
+    sum[c] = s;
+    count[c] = n;
+  });
+  double s = 0;
+  std::size_t n = 0;
+  for (std::size_t c = 0; c < chunks; ++c) {
+    s += sum[c];
+    n += count[c];
+  }
+  return n ? s / double(n) : 0.0;
+}
+
+ImproveReport improve_mesh(SurfaceMesh& mesh, const ImproveParams& params, EventList* events) {
+  const auto t0 = Clock::now();
+  check_params(params);
+  ImproveReport report;
+  if (mesh.n_faces() > 0) {
+    const double L = params.target_edge_length > 0 ? params.target_edge_length : mean_edge_length_parallel(mesh);
+    if (L > 0) {
+      Improver imp(mesh, params, events, report);
+      imp.run(L);
+    }
+  }
+  const auto t1 = Clock::now();
+  if (mesh.has_garbage()) mesh.compact();
+  if (params.measure_quality) report.quality = quality_stats(mesh);
+  report.seconds_finish = since(t1);
+  report.seconds = since(t0);
+  return report;
+}
+
+}  // namespace topotrack

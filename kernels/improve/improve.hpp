@@ -1,0 +1,62 @@
+#pragma once
+//! Mesh improvement (§4.1, following Wojtan et al. 2011): split long edges at their midpoint, collapse
+//! short edges, edges of triangles with a small interior angle and edges across a small dihedral
+//! angle; flip edges of bad triangles where the surface is nearly flat (the paper's §7 wish). Every
+//! re-sampling is recorded in an EventList (§4.4).
+#include "io/event_list.hpp"
+#include "kernels/mesh/mesh_queries.hpp"
+#include "kernels/mesh/surface_mesh.hpp"
+
+namespace topotrack {
+
+//! Parameters of improve_mesh; defaults are the paper's (§4.1). With target edge length L the edge
+//! length bounds are L_min = L / sqrt(ratio) and L_max = L * sqrt(ratio) (L/2 and 2L for ratio 4), so
+//! L_max : L_min = ratio and L is their geometric middle.
+struct ImproveParams {
+  double target_edge_length = 0;  //!< L; <= 0: the mean edge length of the input mesh
+  double ratio = 4;               //!< L_max : L_min (§4.1: 4 : 1)
+  double min_angle_deg = 10;      //!< smallest allowed interior triangle angle (§4.1: 10°)
+  double min_dihedral_deg = 45;   //!< smallest allowed dihedral angle, 180 = flat (§4.1: 45°)
+  int max_iterations = 20;        //!< cap on the split / collapse / flip rounds
+  bool enable_flips = true;       //!< fix bad angles by flips where the surface is nearly flat (§7)
+  //! Bound on how far the operations of one call may move the surface near a vertex, as a fraction of
+  //! L (accumulated per vertex). Collapses across a dihedral angle below min_dihedral_deg (folds,
+  //! removed on purpose) are exempt.
+  double max_surface_deviation = 0.4;
+  //! Flips only across edges whose faces' normals differ by at most this (nearly coplanar).
+  double max_flip_bend_deg = 20;
+  //! Fill ImproveReport::quality (an extra O(n) pass over the output).
+  bool measure_quality = true;
+  //! Debugging aid for tests: call SurfaceMesh::validate() after every operation (O(n) each).
+  bool validate_each_step = false;
+};
+
+struct ImproveReport {
+  std::size_t splits = 0, collapses = 0, flips = 0;
+  int iterations = 0;             //!< rounds run (a round that finds nothing to do ends the loop)
+  double min_edge_length = 0;     //!< L_min used
+  double max_edge_length = 0;     //!< L_max used
+  QualityStats quality;           //!< of the output mesh (when measure_quality)
+  // Seconds per phase.
+  double seconds_scan = 0;        //!< parallel searches for candidates
+  double seconds_split = 0, seconds_collapse = 0, seconds_bad_triangles = 0, seconds_folds = 0;
+  double seconds_finish = 0;      //!< compaction and quality measurement
+  double seconds = 0;             //!< total
+};
+
+//! Improve `mesh` in place (§4.1) and append the re-sampling events to `events` when not null (§4.4):
+//! a split of (i,j) records record_split(i, j, k, 0.5) with k the new vertex's fresh id; a collapse of
+//! (i,j) moves the kept vertex to the midpoint, gives it a fresh id k and records record_collapse(i, j, k).
+//! Flips record nothing (no vertex data moves). Vertex properties are interpolated as the events say.
+//! Every operation keeps a closed 2-manifold (link condition, no fold-over or zero-area triangle, no
+//! duplicate edge). The mesh is compacted at the end (ids survive). A mesh already within bounds is left
+//! bit-identical with zero events after one parallel O(n) scan. Deterministic for any thread count
+//! (candidates are found in parallel, operations applied serially in a fixed order).
+//! \pre mesh is a closed 2-manifold.  \throw InvalidInput on bad parameters.
+ImproveReport improve_mesh(SurfaceMesh& mesh, const ImproveParams& params = {}, EventList* events = nullptr);
+
+//! The mean edge length of `mesh`, summed in parallel in a fixed order (bit-identical for any thread
+//! count); the default target edge length of improve_mesh.
+double mean_edge_length_parallel(const SurfaceMesh& mesh);
+
+}  // namespace topotrack

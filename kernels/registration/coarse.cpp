@@ -1,0 +1,489 @@
+#include "kernels/registration/coarse.hpp"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <chrono>
+#include <cmath>
+
+#include "kernels/mesh/mesh_queries.hpp"
+#include "kernels/registration/correspondences.hpp"
+#include "kernels/registration/deformation_graph.hpp"
+
+namespace topotrack {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+
+using Mat3 = Eigen::Matrix3d;
+using Mat12 = Eigen::Matrix<double, 12, 12>;
+using Vec12 = Eigen::Matrix<double, 12, 1>;
+
+// Unknowns of node j: the columns a1, a2, a3 of A_j (entries 0..8), then b_j (9..11).
+struct NodeState {
+  Mat3 A = Mat3::Identity();
+  Vec3 b = Vec3::Zero();
+};
+
+struct Weights {
+  double fit_point, fit_plane, rigid, smooth, damping_A, damping_b;
+};
+
+struct Problem {
+  const DeformationGraph& graph;
+  const std::vector<Vec3>& rest;  // vertex positions at the start (by handle)
+  const SurfaceMesh& mesh;
+};
+
+Vec3 skin(const Problem& p, const std::vector<NodeState>& s, Index v) {
+  const auto K = std::size_t(p.graph.k);
+  const Vec3& x = p.rest[v];
+  Vec3 out = Vec3::Zero();
+  double wsum = 0;
+  for (std::size_t t = 0; t < K; ++t) {
+    const Index j = p.graph.influence_node[v * K + t];
+    if (j == kInvalidIndex) continue;
+    const double w = p.graph.influence_weight[v * K + t];
+    const Vec3& g = p.graph.node_position[j];
+    out += w * (s[j].A * (x - g) + g + s[j].b);
+    wsum += w;
+  }
+  return wsum > 0 ? out : x;
+}
+
+// Angle-weighted normal of vertex v of the deformed mesh, from its deformed one-ring.
+Vec3 skinned_normal(const Problem& p, const std::vector<NodeState>& s, Vertex v, std::vector<Halfedge>& ring) {
+  p.mesh.outgoing(v, ring);
+  const Vec3 x = skin(p, s, v.idx);
+  Vec3 n = Vec3::Zero();
+  for (Halfedge h : ring) {
+    if (p.mesh.is_boundary(h)) continue;
+    const Vec3 a = skin(p, s, p.mesh.to_vertex(h).idx) - x;
+    const Vec3 b = skin(p, s, p.mesh.to_vertex(p.mesh.next(h)).idx) - x;
+    const Vec3 c = a.cross(b);
+    const double len = c.norm(), la = a.norm(), lb = b.norm();
+    if (!(len > 0) || !(la > 0) || !(lb > 0)) continue;
+    const double angle = std::atan2(len, a.dot(b));
+    n += angle * c / len;
+  }
+  const double len = n.norm();
+  return len > 0 ? Vec3(n / len) : Vec3::Zero();
+}
+
+double rigid_energy(const Mat3& A) {
+  const Vec3 a1 = A.col(0), a2 = A.col(1), a3 = A.col(2);
+  const double r1 = a1.dot(a2), r2 = a1.dot(a3), r3 = a2.dot(a3);
+  const double r4 = 1 - a1.norm(), r5 = 1 - a2.norm(), r6 = 1 - a3.norm();
+  return r1 * r1 + r2 * r2 + r3 * r3 + r4 * r4 + r5 * r5 + r6 * r6;
+}
+
+double fit_energy(const Vec3& x, const Correspondence& c, const Weights& w) {
+  if (!c.valid()) return 0;
+  const Vec3 r = x - c.point;
+  const double rn = c.normal.dot(r);
+  return w.fit_point * r.squaredNorm() + w.fit_plane * rn * rn;
+}
+
+struct Energy {
+  double total = 0, fit = 0;  // fit: alpha_point |r|^2 + alpha_plane <n, r>^2 in relative units, unweighted by alpha_fit
+};
+
+Energy evaluate_energy(const Problem& p, const std::vector<NodeState>& s, const std::vector<Correspondence>& corr,
+                       const Weights& w, double fit_scale) {
+  const DeformationGraph& g = p.graph;
+  const std::size_t nn = g.n_nodes();
+  std::vector<double> total(nn), fit(nn);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nn, 64), [&](const auto& r) {
+    for (std::size_t j = r.begin(); j != r.end(); ++j) {
+      const double f = fit_energy(g.node_position[j] + s[j].b, corr[j], w);
+      double e = f + w.rigid * rigid_energy(s[j].A);
+      for (Index q = g.neighbor_offset[j]; q < g.neighbor_offset[j + 1]; ++q) {
+        const Index k = g.neighbors[q];
+        const Vec3 d = g.node_position[k] - g.node_position[j];
+        const Vec3 res = s[j].A * d + g.node_position[j] + s[j].b - g.node_position[k] - s[k].b;
+        e += w.smooth * res.squaredNorm();
+      }
+      total[j] = e;
+      fit[j] = f * fit_scale;
+    }
+  });
+  Energy out;
+  for (std::size_t j = 0; j < nn; ++j) {
+    out.total += total[j];
+    out.fit += fit[j];
+  }
+  return out;
+}
+
+// The lower triangle of a block matrix over the graph nodes (block size B) in compressed columns,
+// built once: column B j + a holds rows B j + a .. B j + B - 1 of the diagonal block, then B rows per
+// graph neighbour k > j. B = 12 for the Gauss–Newton matrix H, B = 4 for the per-coordinate
+// preconditioner P.
+struct SystemPattern {
+  SparseCholesky::Matrix H;
+  int block = 12;
+};
+
+SystemPattern build_pattern(const DeformationGraph& g, int B) {
+  const std::size_t nn = g.n_nodes(), n = std::size_t(B) * nn;
+  SystemPattern sp;
+  sp.block = B;
+  std::vector<int> outer(n + 1, 0);
+  for (std::size_t j = 0; j < nn; ++j) {
+    int upper = 0;
+    for (Index q = g.neighbor_offset[j]; q < g.neighbor_offset[j + 1]; ++q) upper += g.neighbors[q] > j;
+    for (int a = 0; a < B; ++a) outer[B * j + a + 1] = (B - a) + B * upper;
+  }
+  for (std::size_t c = 0; c < n; ++c) outer[c + 1] += outer[c];
+  sp.H.resize(int(n), int(n));
+  sp.H.makeCompressed();
+  sp.H.resizeNonZeros(outer[n]);
+  std::copy(outer.begin(), outer.end(), sp.H.outerIndexPtr());
+  int* inner = sp.H.innerIndexPtr();
+  for (std::size_t j = 0; j < nn; ++j)
+    for (int a = 0; a < B; ++a) {
+      int pos = outer[B * j + a];
+      for (int r = a; r < B; ++r) inner[pos++] = int(B * j) + r;
+      for (Index q = g.neighbor_offset[j]; q < g.neighbor_offset[j + 1]; ++q)
+        if (g.neighbors[q] > j)
+          for (int r = 0; r < B; ++r) inner[pos++] = int(B * g.neighbors[q]) + r;
+    }
+  std::fill(sp.H.valuePtr(), sp.H.valuePtr() + outer[n], 0.0);
+  return sp;
+}
+
+// Index in a node's 12 unknowns of entry m (0..2: A(c, m); 3: b_c) of coordinate c.
+inline int unknown(int m, int c) { return m < 3 ? 3 * m + c : 9 + c; }
+
+// The 4 x 4 per-coordinate block of a 12 x 12 block, averaged over the coordinates. The smoothness
+// and point-to-point terms are separable by coordinate with the same coefficients for x, y and z;
+// only the rigidity and point-to-plane terms couple coordinates, and only within a node.
+Eigen::Matrix4d coordinate_average(const Mat12& M) {
+  Eigen::Matrix4d out;
+  for (int m = 0; m < 4; ++m)
+    for (int q = 0; q < 4; ++q)
+      out(m, q) = (M(unknown(m, 0), unknown(q, 0)) + M(unknown(m, 1), unknown(q, 1)) +
+                   M(unknown(m, 2), unknown(q, 2))) / 3.0;
+  return out;
+}
+
+// Fill H (lower triangle) and the gradient g = J^T r for the current state; each node writes its own
+// columns and entries, so the result does not depend on the scheduling.
+void assemble(const Problem& p, const std::vector<NodeState>& s, const std::vector<Correspondence>& corr,
+              const Weights& w, SystemPattern& sp, SystemPattern* precond, std::vector<Mat12>* block_inverse,
+              Eigen::VectorXd& grad) {
+  const DeformationGraph& g = p.graph;
+  const std::size_t nn = g.n_nodes();
+  grad.setZero(Eigen::Index(12 * nn));
+  double* values = sp.H.valuePtr();
+  const int* outer = sp.H.outerIndexPtr();
+  double* pvalues = precond ? precond->H.valuePtr() : nullptr;
+  const int* pouter = precond ? precond->H.outerIndexPtr() : nullptr;
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nn, 32), [&](const auto& range) {
+    for (std::size_t j = range.begin(); j != range.end(); ++j) {
+      Mat12 D = Mat12::Zero();
+      Vec12 gj = Vec12::Zero();
+      const Mat3& A = s[j].A;
+      const Vec3& gpos = g.node_position[j];
+      // E_rigid (§4.2): columns orthogonal and of unit length.
+      {
+        const Vec3 a[3] = {A.col(0), A.col(1), A.col(2)};
+        const int pairs[3][2] = {{0, 1}, {0, 2}, {1, 2}};
+        for (const auto& pr : pairs) {
+          Eigen::Matrix<double, 9, 1> J = Eigen::Matrix<double, 9, 1>::Zero();
+          J.segment<3>(3 * pr[0]) = a[pr[1]];
+          J.segment<3>(3 * pr[1]) = a[pr[0]];
+          const double r = a[pr[0]].dot(a[pr[1]]);
+          D.topLeftCorner<9, 9>() += w.rigid * J * J.transpose();
+          gj.head<9>() += w.rigid * r * J;
+        }
+        for (int c = 0; c < 3; ++c) {
+          const double len = a[c].norm();
+          if (!(len > 0)) continue;
+          const Vec3 J = -a[c] / len;
+          const double r = 1 - len;
+          D.block<3, 3>(3 * c, 3 * c) += w.rigid * J * J.transpose();
+          gj.segment<3>(3 * c) += w.rigid * r * J;
+        }
+      }
+      // E_fit at the node: point-to-point and point-to-plane.
+      if (corr[j].valid()) {
+        const Vec3 r = gpos + s[j].b - corr[j].point;
+        const Vec3& n = corr[j].normal;
+        const Mat3 W = w.fit_point * Mat3::Identity() + w.fit_plane * n * n.transpose();
+        D.block<3, 3>(9, 9) += W;
+        gj.tail<3>() += W * r;
+      }
+      // E_smooth over both directed edges j->k and k->j.
+      for (Index q = g.neighbor_offset[j]; q < g.neighbor_offset[j + 1]; ++q) {
+        const Index k = g.neighbors[q];
+        const Vec3& gk = g.node_position[k];
+        const Vec3 d = gk - gpos;  // j -> k
+        const Vec3 r_jk = A * d + gpos + s[j].b - gk - s[k].b;
+        const Vec3 r_kj = s[k].A * (-d) + gk + s[k].b - gpos - s[j].b;
+        // j -> k: J_j = [d0 I, d1 I, d2 I, I].
+        for (int c1 = 0; c1 < 4; ++c1) {
+          const double f1 = c1 < 3 ? d[c1] : 1.0;
+          gj.segment<3>(3 * c1) += w.smooth * f1 * r_jk;
+          for (int c2 = 0; c2 < 4; ++c2) {
+            const double f2 = c2 < 3 ? d[c2] : 1.0;
+            D.block<3, 3>(3 * c1, 3 * c2).diagonal().array() += w.smooth * f1 * f2;
+          }
+        }
+        // k -> j: J wrt b_j = -I.
+        D.block<3, 3>(9, 9).diagonal().array() += w.smooth;
+        gj.tail<3>() -= w.smooth * r_kj;
+      }
+      // Levenberg–Marquardt damping.
+      for (int c = 0; c < 9; ++c) D(c, c) += w.damping_A;
+      for (int c = 9; c < 12; ++c) D(c, c) += w.damping_b;
+
+      grad.segment<12>(Eigen::Index(12 * j)) = gj;
+      for (int a = 0; a < 12; ++a) {
+        int pos = outer[12 * j + a];
+        for (int r = a; r < 12; ++r) values[pos++] = D(r, a);
+      }
+      if (block_inverse) (*block_inverse)[j] = D.ldlt().solve(Mat12::Identity());
+      if (precond) {
+        const Eigen::Matrix4d P = coordinate_average(D);
+        for (int a = 0; a < 4; ++a) {
+          int pos = pouter[4 * j + a];
+          for (int r = a; r < 4; ++r) pvalues[pos++] = P(r, a);
+        }
+      }
+      // Off-diagonal blocks H_kj (rows: unknowns of k > j, columns: unknowns of j).
+      int m = 0;
+      for (Index q = g.neighbor_offset[j]; q < g.neighbor_offset[j + 1]; ++q) {
+        const Index k = g.neighbors[q];
+        if (k < j) continue;
+        const Vec3 d = g.node_position[k] - gpos;
+        Mat12 B = Mat12::Zero();
+        // j -> k: J_k = [0, 0, 0, -I], J_j = [d0 I, d1 I, d2 I, I]  =>  rows b_k.
+        for (int c2 = 0; c2 < 4; ++c2) B.block<3, 3>(9, 3 * c2).diagonal().array() -= w.smooth * (c2 < 3 ? d[c2] : 1.0);
+        // k -> j: J_k = [-d0 I, -d1 I, -d2 I, I] (its edge vector is -d), J_j = [0, 0, 0, -I]  =>  columns b_j.
+        for (int c1 = 0; c1 < 4; ++c1)
+          B.block<3, 3>(3 * c1, 9).diagonal().array() -= w.smooth * (c1 < 3 ? -d[c1] : 1.0);
+        for (int a = 0; a < 12; ++a) {
+          const int pos = outer[12 * j + a] + (12 - a) + 12 * m;
+          for (int r = 0; r < 12; ++r) values[pos + r] = B(r, a);
+        }
+        if (precond) {
+          const Eigen::Matrix4d P = coordinate_average(B);
+          for (int a = 0; a < 4; ++a) {
+            const int pos = pouter[4 * j + a] + (4 - a) + 4 * m;
+            for (int r = 0; r < 4; ++r) pvalues[pos + r] = P(r, a);
+          }
+        }
+        ++m;
+      }
+    }
+  });
+}
+
+// Solve H x = rhs (H given by its lower triangle) by preconditioned conjugate gradients. The
+// preconditioner is a symmetric multiplicative two-level scheme: node-block Jacobi (the exact 12 x 12
+// diagonal blocks, which hold the stiff rigidity coupling of x, y, z within a node), then a coarse
+// correction by the Cholesky factor of the per-coordinate matrix P (the coupling between nodes), then
+// block Jacobi again.
+int preconditioned_cg(const SparseCholesky::Matrix& H, const SparseCholesky& P, const std::vector<Mat12>& block_inverse,
+                      const Eigen::VectorXd& rhs, double tolerance, int max_iterations, Eigen::VectorXd& x) {
+  const Eigen::Index nn = rhs.size() / 12;
+  Eigen::MatrixXd U(4 * nn, 3);
+  auto apply_separable = [&](const Eigen::VectorXd& r) {
+    for (Eigen::Index j = 0; j < nn; ++j)
+      for (int c = 0; c < 3; ++c)
+        for (int m = 0; m < 4; ++m) U(4 * j + m, c) = r[12 * j + unknown(m, c)];
+    const Eigen::MatrixXd Z = P.solve(U);
+    Eigen::VectorXd z(rhs.size());
+    for (Eigen::Index j = 0; j < nn; ++j)
+      for (int c = 0; c < 3; ++c)
+        for (int m = 0; m < 4; ++m) z[12 * j + unknown(m, c)] = Z(4 * j + m, c);
+    return z;
+  };
+  auto apply_blocks = [&](const Eigen::VectorXd& r) {
+    Eigen::VectorXd z(r.size());
+    tbb::parallel_for(tbb::blocked_range<Eigen::Index>(0, nn, 256), [&](const auto& range) {
+      for (Eigen::Index j = range.begin(); j != range.end(); ++j)
+        z.segment<12>(12 * j) = block_inverse[std::size_t(j)] * r.segment<12>(12 * j);
+    });
+    return z;
+  };
+  auto apply_h = [&](const Eigen::VectorXd& v) -> Eigen::VectorXd { return H.selfadjointView<Eigen::Lower>() * v; };
+  auto precondition = [&](const Eigen::VectorXd& r) {
+    Eigen::VectorXd z = apply_blocks(r);
+    z += apply_separable(r - apply_h(z));
+    z += apply_blocks(r - apply_h(z));
+    return z;
+  };
+  x.setZero(rhs.size());
+  const double rhs_norm = rhs.norm();
+  if (!(rhs_norm > 0)) return 0;
+  Eigen::VectorXd r = rhs, z = precondition(r), p = z, Hp;
+  double rz = r.dot(z);
+  int it = 0;
+  while (it < max_iterations && r.norm() > tolerance * rhs_norm) {
+    Hp = apply_h(p);
+    const double pHp = p.dot(Hp);
+    if (!(pHp > 0)) break;
+    const double alpha = rz / pHp;
+    x += alpha * p;
+    r -= alpha * Hp;
+    z = precondition(r);
+    const double rz_new = r.dot(z);
+    p = z + (rz_new / rz) * p;
+    rz = rz_new;
+    ++it;
+  }
+  return it;
+}
+
+}  // namespace
+
+CoarseReport align_coarse(SurfaceMesh& mesh, const TargetSurface& target, const CoarseParams& params) {
+  const auto t_total = Clock::now();
+  CoarseReport rep;
+  if (!(params.node_spacing_factor > 0) || !(params.graph_density > 0) || params.graph_density > 1 ||
+      !(params.alpha_reg_start > 0) || !(params.alpha_reg_min > 0) || !(params.alpha_fit >= 0) ||
+      !(params.alpha_point >= 0) || !(params.alpha_plane >= 0) || params.max_iterations < 0 ||
+      params.max_iterations_per_level < 1 || !(params.damping > 0))
+    TT_THROW(InvalidInput, "align_coarse: invalid parameters");
+  if (mesh.n_vertices() == 0 || mesh.n_faces() == 0) TT_THROW(InvalidInput, "align_coarse: empty mesh");
+
+  // Relative units: the scene's bounding-box diagonal is 1 (§4.2).
+  BoundingBox scene = bounding_box(mesh);
+  scene.extend(target.bounds().min);
+  scene.extend(target.bounds().max);
+  const double D = scene.diagonal();
+  if (!(D > 0) || !std::isfinite(D)) TT_THROW(InvalidInput, "align_coarse: degenerate or non-finite scene");
+  const double inv_d2 = 1.0 / (D * D);
+
+  auto t0 = Clock::now();
+  const double spacing = params.node_spacing_factor * mean_edge_length(mesh) / std::sqrt(params.graph_density);
+  const DeformationGraph graph = build_deformation_graph(mesh, spacing, params.k);
+  const std::vector<Vec3> rest = mesh.positions();
+  const Problem problem{graph, rest, mesh};
+  const std::size_t nn = graph.n_nodes();
+  rep.nodes = int(nn);
+  rep.graph_edges = int(graph.edges.size());
+  rep.node_spacing = spacing;
+  const bool direct = params.linear_solver == CoarseLinearSolver::Direct;
+  SystemPattern pattern = build_pattern(graph, 12);
+  SystemPattern precond = direct ? SystemPattern{} : build_pattern(graph, 4);
+  SparseCholesky solver(params.solver);
+  rep.seconds_graph = seconds_since(t0);
+  t0 = Clock::now();
+  solver.analyze(direct ? pattern.H : precond.H);
+  bool refactor = true;
+  std::vector<Mat12> block_inverse(direct ? 0 : nn);
+  rep.seconds_factorisation += seconds_since(t0);
+
+  CorrespondenceParams cparams;
+  cparams.max_normal_angle_deg = params.max_normal_angle_deg;
+  cparams.max_closest_ratio = params.max_closest_ratio;
+
+  std::vector<NodeState> state(nn), trial(nn);
+  std::vector<Vec3> node_x(nn), node_n(nn);
+  std::vector<Correspondence> corr;
+  Eigen::VectorXd grad;
+  double alpha_reg = params.alpha_reg_start;
+  int level_iterations = 0;
+  bool first = true;
+  for (int it = 0; it < params.max_iterations; ++it) {
+    // Correspondences from each node along its (deformed) normal.
+    t0 = Clock::now();
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nn, 32), [&](const auto& r) {
+      std::vector<Halfedge> ring;
+      for (std::size_t j = r.begin(); j != r.end(); ++j) {
+        node_x[j] = graph.node_position[j] + state[j].b;
+        node_n[j] = skinned_normal(problem, state, graph.node_vertex[j], ring);
+      }
+    });
+    corr = find_correspondences(target, node_x, node_n, cparams);
+    rep.seconds_correspondences += seconds_since(t0);
+    const CorrespondenceCounts counts = count_correspondences(corr);
+    rep.correspondences = counts.ok;
+    rep.pruned_no_hit = counts.no_hit;
+    rep.pruned_normal = counts.normal_angle;
+    rep.pruned_distance = counts.too_far;
+
+    // One Gauss–Newton step on the total energy.
+    t0 = Clock::now();
+    const Weights w{params.alpha_fit * params.alpha_point * inv_d2,
+                    params.alpha_fit * params.alpha_plane * inv_d2,
+                    alpha_reg,
+                    alpha_reg * params.smooth_weight * inv_d2,
+                    params.damping,
+                    params.damping * inv_d2};
+    const double fit_scale = params.alpha_fit > 0 ? 1.0 / params.alpha_fit : 0.0;
+    const Energy before = evaluate_energy(problem, state, corr, w, fit_scale);
+    if (first) {
+      rep.energy_start = before.total;
+      rep.fit_start = before.fit;
+      first = false;
+    }
+    assemble(problem, state, corr, w, pattern, direct ? nullptr : &precond, direct ? nullptr : &block_inverse, grad);
+    rep.seconds_assembly += seconds_since(t0);
+    Eigen::VectorXd delta;
+    if (direct || refactor || params.refactor_each_round) {
+      t0 = Clock::now();
+      solver.factorize(direct ? pattern.H : precond.H);
+      ++rep.factorisations;
+      refactor = false;
+      rep.seconds_factorisation += seconds_since(t0);
+    }
+    t0 = Clock::now();
+    if (direct) delta = solver.solve(Eigen::VectorXd(-grad));
+    else
+      rep.pcg_iterations +=
+          preconditioned_cg(pattern.H, solver, block_inverse, -grad, params.pcg_tolerance, params.max_pcg_iterations, delta);
+    rep.seconds_solve += seconds_since(t0);
+
+    // Accept the step, halving it while it raises the energy (the rigidity term is not quadratic).
+    t0 = Clock::now();
+    Energy after = before;
+    bool accepted = false;
+    for (double t = 1.0; t >= 1.0 / 16; t *= 0.5) {
+      for (std::size_t j = 0; j < nn; ++j) {
+        const auto dj = delta.segment<12>(Eigen::Index(12 * j));
+        trial[j].A = state[j].A + t * Eigen::Map<const Mat3>(dj.data());
+        trial[j].b = state[j].b + t * dj.tail<3>();
+      }
+      const Energy e = evaluate_energy(problem, trial, corr, w, fit_scale);
+      if (e.total <= before.total) {
+        after = e;
+        state.swap(trial);
+        accepted = true;
+        break;
+      }
+    }
+    rep.seconds_assembly += seconds_since(t0);
+    rep.iterations = it + 1;
+    rep.energy_history.push_back(after.total);
+    rep.energy_end = after.total;
+    rep.fit_end = after.fit;
+    rep.alpha_reg_end = alpha_reg;
+    ++level_iterations;
+
+    const bool converged = !accepted || before.total - after.total <= params.convergence_tolerance * before.total;
+    if (converged || level_iterations >= params.max_iterations_per_level) {
+      alpha_reg /= 10;
+      level_iterations = 0;
+      refactor = true;
+      if (alpha_reg < params.alpha_reg_min * (1 - 1e-12)) break;
+    }
+  }
+
+  // Carry the node transforms to every vertex by linear blend skinning.
+  t0 = Clock::now();
+  auto& pos = mesh.positions();
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, pos.size(), 1024), [&](const auto& r) {
+    for (std::size_t v = r.begin(); v != r.end(); ++v)
+      if (!mesh.is_deleted(Vertex(Index(v)))) pos[v] = skin(problem, state, Index(v));
+  });
+  rep.seconds_assembly += seconds_since(t0);
+  rep.seconds_total = seconds_since(t_total);
+  return rep;
+}
+
+}  // namespace topotrack

@@ -1,0 +1,221 @@
+#include "kernels/registration/deformation_graph.hpp"
+
+#include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <queue>
+
+namespace topotrack {
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+// Geodesic radius, in node spacings, of the search for each vertex's k + 1 nearest nodes. With
+// Poisson-disk nodes at spacing r a disk of radius 2.5 r holds about 12 nodes, comfortably more than 5.
+constexpr double kSearchRadiusFactor = 2.5;
+
+// Vertex adjacency with edge lengths, by vertex handle index (CSR, in edge order).
+struct Adjacency {
+  std::vector<Index> offset, target;
+  std::vector<double> length;
+};
+
+Adjacency build_adjacency(const SurfaceMesh& mesh) {
+  Adjacency a;
+  const std::size_t nv = mesh.vertices_size();
+  a.offset.assign(nv + 1, 0);
+  for (std::size_t e = 0; e < mesh.edges_size(); ++e) {
+    if (mesh.is_deleted(Edge(Index(e)))) continue;
+    ++a.offset[mesh.vertex(Edge(Index(e)), 0).idx + 1];
+    ++a.offset[mesh.vertex(Edge(Index(e)), 1).idx + 1];
+  }
+  for (std::size_t v = 0; v < nv; ++v) a.offset[v + 1] += a.offset[v];
+  a.target.resize(a.offset[nv]);
+  a.length.resize(a.offset[nv]);
+  std::vector<Index> fill(a.offset.begin(), a.offset.end() - 1);
+  for (std::size_t e = 0; e < mesh.edges_size(); ++e) {
+    const Edge edge{Index(e)};
+    if (mesh.is_deleted(edge)) continue;
+    const Vertex u = mesh.vertex(edge, 0), w = mesh.vertex(edge, 1);
+    const double len = (mesh.position(u) - mesh.position(w)).norm();
+    a.target[fill[u.idx]] = w.idx;
+    a.length[fill[u.idx]++] = len;
+    a.target[fill[w.idx]] = u.idx;
+    a.length[fill[w.idx]++] = len;
+  }
+  return a;
+}
+
+using QueueItem = std::pair<double, Index>;
+using MinQueue = std::priority_queue<QueueItem, std::vector<QueueItem>, std::greater<>>;
+
+// Scratch of one bounded Dijkstra run, reset through the list of touched vertices.
+struct DijkstraScratch {
+  std::vector<double> dist;
+  std::vector<Index> touched;
+  MinQueue queue;
+};
+
+// Distances from `source` to every vertex within `radius`, as (vertex, distance), in settling order.
+void bounded_dijkstra(const Adjacency& adj, Index source, double radius, DijkstraScratch& s,
+                      std::vector<std::pair<Index, double>>& out) {
+  out.clear();
+  s.dist[source] = 0;
+  s.touched.push_back(source);
+  s.queue.push({0.0, source});
+  while (!s.queue.empty()) {
+    const auto [d, u] = s.queue.top();
+    s.queue.pop();
+    if (d > s.dist[u]) continue;
+    out.push_back({u, d});
+    for (Index i = adj.offset[u]; i < adj.offset[u + 1]; ++i) {
+      const Index w = adj.target[i];
+      const double nd = d + adj.length[i];
+      if (nd <= radius && nd < s.dist[w]) {
+        if (s.dist[w] == kInf) s.touched.push_back(w);
+        s.dist[w] = nd;
+        s.queue.push({nd, w});
+      }
+    }
+  }
+  for (Index v : s.touched) s.dist[v] = kInf;
+  s.touched.clear();
+}
+
+// Geodesic Poisson-disk sampling: visit vertices in handle order and make each vertex farther than
+// `spacing` from every node so far a node; coverage grows by bounded multi-source Dijkstra.
+std::vector<Vertex> sample_nodes(const SurfaceMesh& mesh, const Adjacency& adj, double spacing) {
+  const std::size_t nv = mesh.vertices_size();
+  std::vector<double> dist(nv, kInf);
+  std::vector<Vertex> nodes;
+  MinQueue queue;
+  for (Index v = 0; v < nv; ++v) {
+    if (mesh.is_deleted(Vertex(v)) || adj.offset[v] == adj.offset[v + 1] || dist[v] < spacing) continue;
+    nodes.push_back(Vertex(v));
+    dist[v] = 0;
+    queue.push({0.0, v});
+    while (!queue.empty()) {
+      const auto [d, u] = queue.top();
+      queue.pop();
+      if (d > dist[u]) continue;
+      for (Index i = adj.offset[u]; i < adj.offset[u + 1]; ++i) {
+        const Index w = adj.target[i];
+        const double nd = d + adj.length[i];
+        if (nd < spacing && nd < dist[w]) {
+          dist[w] = nd;
+          queue.push({nd, w});
+        }
+      }
+    }
+  }
+  return nodes;
+}
+
+}  // namespace
+
+DeformationGraph build_deformation_graph(const SurfaceMesh& mesh, double spacing, int k) {
+  if (!(spacing > 0) || !std::isfinite(spacing))
+    TT_THROW(InvalidInput, "deformation graph: node spacing must be positive, got " << spacing);
+  if (k < 1 || k > 16) TT_THROW(InvalidInput, "deformation graph: k must be in [1, 16], got " << k);
+  if (mesh.n_vertices() == 0 || mesh.n_edges() == 0) TT_THROW(InvalidInput, "deformation graph: empty mesh");
+
+  DeformationGraph g;
+  g.k = k;
+  g.spacing = spacing;
+  const Adjacency adj = build_adjacency(mesh);
+  const std::size_t nv = mesh.vertices_size();
+  g.node_vertex = sample_nodes(mesh, adj, spacing);
+  const std::size_t nn = g.node_vertex.size();
+  g.node_position.resize(nn);
+  for (std::size_t j = 0; j < nn; ++j) g.node_position[j] = mesh.position(g.node_vertex[j]);
+
+  // Each node's geodesic neighbourhood, in parallel, into per-node arrays.
+  const double radius = kSearchRadiusFactor * spacing;
+  std::vector<std::vector<std::pair<Index, double>>> reach(nn);
+  tbb::enumerable_thread_specific<DijkstraScratch> scratch([nv] {
+    DijkstraScratch s;
+    s.dist.assign(nv, kInf);
+    return s;
+  });
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nn, 8), [&](const auto& r) {
+    DijkstraScratch& s = scratch.local();
+    for (std::size_t j = r.begin(); j != r.end(); ++j) bounded_dijkstra(adj, g.node_vertex[j].idx, radius, s, reach[j]);
+  });
+
+  // Per vertex the (distance, node) pairs, gathered in node order (CSR).
+  std::vector<std::size_t> offset(nv + 1, 0);
+  for (const auto& list : reach)
+    for (const auto& [v, d] : list) ++offset[v + 1];
+  for (std::size_t v = 0; v < nv; ++v) offset[v + 1] += offset[v];
+  std::vector<std::pair<double, Index>> cand(offset[nv]);
+  {
+    std::vector<std::size_t> fill(offset.begin(), offset.end() - 1);
+    for (std::size_t j = 0; j < nn; ++j)
+      for (const auto& [v, d] : reach[j]) cand[fill[v]++] = {d, Index(j)};
+  }
+  reach.clear();
+  reach.shrink_to_fit();
+
+  const auto K = std::size_t(k);
+  g.influence_node.assign(nv * K, kInvalidIndex);
+  g.influence_weight.assign(nv * K, 0.0);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv, 1024), [&](const auto& r) {
+    for (std::size_t v = r.begin(); v != r.end(); ++v) {
+      auto first = cand.begin() + std::ptrdiff_t(offset[v]), last = cand.begin() + std::ptrdiff_t(offset[v + 1]);
+      const std::size_t m = std::size_t(last - first);
+      if (m == 0) continue;
+      const std::size_t keep = std::min(m, K + 1);
+      std::partial_sort(first, first + std::ptrdiff_t(keep), last);
+      const std::size_t used = std::min(m, K);
+      // d_max: distance to the (k+1)-th node; the search radius when the neighbourhood holds fewer.
+      const double dmax = m > K ? first[std::ptrdiff_t(K)].first : radius;
+      double sum = 0;
+      for (std::size_t s = 0; s < used; ++s) {
+        const double t = dmax > 0 ? std::max(0.0, 1.0 - first[std::ptrdiff_t(s)].first / dmax) : 1.0;
+        g.influence_node[v * K + s] = first[std::ptrdiff_t(s)].second;
+        g.influence_weight[v * K + s] = t * t;
+        sum += t * t;
+      }
+      for (std::size_t s = 0; s < used; ++s)
+        g.influence_weight[v * K + s] = sum > 0 ? g.influence_weight[v * K + s] / sum : 1.0 / double(used);
+    }
+  });
+
+  // A graph edge wherever one vertex is influenced by two nodes.
+  std::vector<std::uint64_t> keys;
+  keys.reserve(nv * K * (K - 1) / 2);
+  for (std::size_t v = 0; v < nv; ++v)
+    for (std::size_t a = 0; a < K; ++a)
+      for (std::size_t b = a + 1; b < K; ++b) {
+        const Index i = g.influence_node[v * K + a], j = g.influence_node[v * K + b];
+        if (i == kInvalidIndex || j == kInvalidIndex) continue;
+        keys.push_back((std::uint64_t(std::min(i, j)) << 32) | std::max(i, j));
+      }
+  tbb::parallel_sort(keys.begin(), keys.end());
+  keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
+  g.edges.resize(keys.size());
+  for (std::size_t e = 0; e < keys.size(); ++e) g.edges[e] = {Index(keys[e] >> 32), Index(keys[e] & 0xffffffffu)};
+
+  g.neighbor_offset.assign(nn + 1, 0);
+  for (const auto& [i, j] : g.edges) {
+    ++g.neighbor_offset[i + 1];
+    ++g.neighbor_offset[j + 1];
+  }
+  for (std::size_t j = 0; j < nn; ++j) g.neighbor_offset[j + 1] += g.neighbor_offset[j];
+  g.neighbors.resize(g.neighbor_offset[nn]);
+  std::vector<Index> fill(g.neighbor_offset.begin(), g.neighbor_offset.end() - 1);
+  for (const auto& [i, j] : g.edges) {
+    g.neighbors[fill[i]++] = j;
+    g.neighbors[fill[j]++] = i;
+  }
+  for (std::size_t j = 0; j < nn; ++j)
+    std::sort(g.neighbors.begin() + g.neighbor_offset[j], g.neighbors.begin() + g.neighbor_offset[j + 1]);
+  return g;
+}
+
+}  // namespace topotrack

@@ -1,0 +1,195 @@
+#include "kernels/registration/fine.hpp"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+
+#include "kernels/mesh/mesh_queries.hpp"
+#include "kernels/registration/correspondences.hpp"
+
+namespace topotrack {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+
+// Sums in fixed chunks, partials added in chunk order: the same bits for any thread count.
+constexpr std::size_t kChunk = 4096;
+
+template <class F>
+Vec3 deterministic_sum(std::size_t n, F&& term) {
+  const std::size_t chunks = (n + kChunk - 1) / kChunk;
+  std::vector<Vec3> partial(chunks, Vec3::Zero());
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, chunks, 1), [&](const auto& r) {
+    for (std::size_t c = r.begin(); c != r.end(); ++c) {
+      Vec3 s = Vec3::Zero();
+      const std::size_t end = std::min(n, (c + 1) * kChunk);
+      for (std::size_t i = c * kChunk; i < end; ++i) s += term(i);
+      partial[c] = s;
+    }
+  });
+  Vec3 total = Vec3::Zero();
+  for (const Vec3& p : partial) total += p;
+  return total;
+}
+
+template <class F>
+void parallel_each(std::size_t n, F&& f) {
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 2048), [&](const auto& r) {
+    for (std::size_t i = r.begin(); i != r.end(); ++i) f(i);
+  });
+}
+
+// Vertex adjacency by handle index (CSR, neighbours in one-ring order), built in parallel.
+struct Adjacency {
+  std::vector<Index> offset, neighbor;
+};
+
+Adjacency build_adjacency(const SurfaceMesh& mesh) {
+  const std::size_t nv = mesh.vertices_size();
+  Adjacency a;
+  std::vector<Index> valence(nv, 0);
+  parallel_each(nv, [&](std::size_t v) {
+    const Vertex vh{Index(v)};
+    if (!mesh.is_deleted(vh) && !mesh.is_isolated(vh)) valence[v] = Index(mesh.valence(vh));
+  });
+  a.offset.assign(nv + 1, 0);
+  for (std::size_t v = 0; v < nv; ++v) a.offset[v + 1] = a.offset[v] + valence[v];
+  a.neighbor.resize(a.offset[nv]);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv, 2048), [&](const auto& r) {
+    std::vector<Vertex> ring;
+    for (std::size_t v = r.begin(); v != r.end(); ++v) {
+      if (valence[v] == 0) continue;
+      mesh.one_ring(Vertex(Index(v)), ring);
+      for (std::size_t i = 0; i < ring.size(); ++i) a.neighbor[a.offset[v] + i] = ring[i].idx;
+    }
+  });
+  return a;
+}
+
+struct System {
+  const Adjacency& adj;
+  std::vector<double> fit;  // w_i: fit weight where a correspondence exists, else 0
+  double smooth = 1;
+
+  Vec3 apply(const std::vector<Vec3>& d, std::size_t i) const {
+    Vec3 out = fit[i] * d[i];
+    for (Index q = adj.offset[i]; q < adj.offset[i + 1]; ++q) out += smooth * (d[i] - d[adj.neighbor[q]]);
+    return out;
+  }
+  double diagonal(std::size_t i) const {
+    const double dg = fit[i] + smooth * double(adj.offset[i + 1] - adj.offset[i]);
+    return dg > 0 ? dg : 1.0;
+  }
+};
+
+}  // namespace
+
+FineReport align_fine(SurfaceMesh& mesh, const TargetSurface& target, const FineParams& params) {
+  const auto t_total = Clock::now();
+  if (!(params.sigma > 0) || !(params.fit_weight > 0) || !(params.smooth_weight >= 0) ||
+      params.max_cg_iterations < 0 || !(params.tolerance >= 0) || params.rounds < 1)
+    TT_THROW(InvalidInput, "align_fine: invalid parameters");
+  FineReport rep;
+  const std::size_t nv = mesh.vertices_size();
+  if (mesh.n_vertices() == 0) return rep;
+  BoundingBox scene = bounding_box(mesh);
+  scene.extend(target.bounds().min);
+  scene.extend(target.bounds().max);
+  const double D = scene.diagonal();
+  if (!std::isfinite(D)) TT_THROW(InvalidInput, "align_fine: non-finite coordinates");
+
+  auto t0 = Clock::now();
+  const Adjacency adj = build_adjacency(mesh);
+  rep.seconds_assembly += seconds_since(t0);
+
+  CorrespondenceParams cparams;
+  cparams.max_normal_angle_deg = params.max_normal_angle_deg;
+  cparams.max_closest_ratio = std::numeric_limits<double>::infinity();
+  cparams.max_distance = params.sigma * D;  // "sigma = 0.1 given a scene bounding box diagonal of 1"
+
+  auto& pos = mesh.positions();
+  std::vector<Vec3> rhs(nv), d(nv), r(nv), z(nv), p(nv), Ap(nv);
+  for (int round = 0; round < params.rounds; ++round) {
+    t0 = Clock::now();
+    const std::vector<Vec3> normals = vertex_normals(mesh);
+    const std::vector<Correspondence> corr = find_correspondences(target, pos, normals, cparams);
+    rep.seconds_raycast += seconds_since(t0);
+
+    t0 = Clock::now();
+    System sys{adj, std::vector<double>(nv, 0.0), params.smooth_weight};
+    std::size_t matched = 0;
+    for (std::size_t i = 0; i < nv; ++i)
+      if (corr[i].valid() && !mesh.is_deleted(Vertex(Index(i)))) ++matched;
+    rep.correspondences = matched;
+    rep.pruned = mesh.n_vertices() - matched;
+    parallel_each(nv, [&](std::size_t i) {
+      const bool ok = corr[i].valid() && !mesh.is_deleted(Vertex(Index(i)));
+      sys.fit[i] = ok ? params.fit_weight : 0.0;
+      rhs[i] = ok ? Vec3(params.fit_weight * (corr[i].point - pos[i])) : Vec3::Zero();
+      d[i] = ok ? Vec3(corr[i].point - pos[i]) : Vec3::Zero();  // warm start
+    });
+    auto energy = [&](const std::vector<Vec3>& disp) {
+      return deterministic_sum(nv, [&](std::size_t i) {
+        double e = sys.fit[i] > 0 ? sys.fit[i] * (pos[i] + disp[i] - corr[i].point).squaredNorm() : 0.0;
+        for (Index q = adj.offset[i]; q < adj.offset[i + 1]; ++q)
+          e += 0.5 * sys.smooth * (disp[i] - disp[adj.neighbor[q]]).squaredNorm();
+        return Vec3(e, 0, 0);
+      })[0];
+    };
+    {
+      std::vector<Vec3> zero(nv, Vec3::Zero());
+      rep.energy_start = energy(zero);
+    }
+    rep.seconds_assembly += seconds_since(t0);
+
+    // Preconditioned CG on the three coordinates at once (same matrix, independent scalars).
+    t0 = Clock::now();
+    parallel_each(nv, [&](std::size_t i) {
+      r[i] = rhs[i] - sys.apply(d, i);
+      z[i] = r[i] / sys.diagonal(i);
+      p[i] = z[i];
+    });
+    const Vec3 rhs_norm2 = deterministic_sum(nv, [&](std::size_t i) { return Vec3(rhs[i].cwiseAbs2()); });
+    Vec3 rz = deterministic_sum(nv, [&](std::size_t i) { return Vec3(r[i].cwiseProduct(z[i])); });
+    Vec3 r_norm2 = deterministic_sum(nv, [&](std::size_t i) { return Vec3(r[i].cwiseAbs2()); });
+    auto relative = [&](const Vec3& rn2) {
+      double worst = 0;
+      for (int c = 0; c < 3; ++c) worst = std::max(worst, rhs_norm2[c] > 0 ? std::sqrt(rn2[c] / rhs_norm2[c]) : 0.0);
+      return worst;
+    };
+    int iterations = 0;
+    while (iterations < params.max_cg_iterations && relative(r_norm2) > params.tolerance) {
+      parallel_each(nv, [&](std::size_t i) { Ap[i] = sys.apply(p, i); });
+      const Vec3 pAp = deterministic_sum(nv, [&](std::size_t i) { return Vec3(p[i].cwiseProduct(Ap[i])); });
+      Vec3 alpha;
+      for (int c = 0; c < 3; ++c) alpha[c] = pAp[c] > 0 ? rz[c] / pAp[c] : 0.0;
+      parallel_each(nv, [&](std::size_t i) {
+        d[i] += alpha.cwiseProduct(p[i]);
+        r[i] -= alpha.cwiseProduct(Ap[i]);
+        z[i] = r[i] / sys.diagonal(i);
+      });
+      const Vec3 rz_new = deterministic_sum(nv, [&](std::size_t i) { return Vec3(r[i].cwiseProduct(z[i])); });
+      r_norm2 = deterministic_sum(nv, [&](std::size_t i) { return Vec3(r[i].cwiseAbs2()); });
+      Vec3 beta;
+      for (int c = 0; c < 3; ++c) beta[c] = rz[c] > 0 ? rz_new[c] / rz[c] : 0.0;
+      rz = rz_new;
+      parallel_each(nv, [&](std::size_t i) { p[i] = z[i] + beta.cwiseProduct(p[i]); });
+      ++iterations;
+    }
+    rep.cg_iterations += iterations;
+    rep.residual = relative(r_norm2);
+    rep.energy_end = energy(d);
+    parallel_each(nv, [&](std::size_t i) {
+      if (!mesh.is_deleted(Vertex(Index(i))) && d[i].allFinite()) pos[i] += d[i];
+    });
+    rep.seconds_solve += seconds_since(t0);
+  }
+  rep.seconds_total = seconds_since(t_total);
+  return rep;
+}
+
+}  // namespace topotrack

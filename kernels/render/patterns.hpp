@@ -1,0 +1,44 @@
+#pragma once
+//! Sources of per-vertex data to propagate (§4.6, §5 colour and displacement maps): procedural patterns in
+//! space (3D checkerboard, stripes, a sine wave, a constant) and an image projected onto a frame.
+#include <span>
+#include <string>
+#include <vector>
+
+#include "kernels/render/camera.hpp"
+#include "kernels/render/image.hpp"
+
+namespace topotrack {
+
+enum class PatternKind { Checker, Stripes, Sine, Constant };
+
+struct PatternParams {
+  PatternKind kind = PatternKind::Checker;
+  double cell = 0;              //!< checker cell, stripe width, half the sine period; <= 0: 1/8 of the bbox diagonal
+  Vec3 axis = Vec3::UnitX();    //!< stripes and sine run along this direction
+  Vec3 origin = Vec3::Zero();   //!< where the pattern is anchored
+  std::vector<float> a = {0.95f, 0.95f, 0.92f};  //!< first value (its size is the width of the result)
+  std::vector<float> b = {0.12f, 0.25f, 0.65f};  //!< second value, same size
+};
+
+//! The pattern at each position, a.size() floats per vertex: checker = a or b by the parity of
+//! floor(x/cell)+floor(y/cell)+floor(z/cell); stripes = a or b by the parity of floor(<p-origin,axis>/cell);
+//! sine = a + (b - a) (1 + sin(pi <p-origin,axis> / cell)) / 2 (smooth); constant = a.
+//! \throw InvalidInput on empty or differently sized a and b, a zero axis or non-finite positions.
+std::vector<float> evaluate_pattern(std::span<const Vec3> positions, const PatternParams& params);
+
+//! Parse "checker", "stripes", "sine", "constant". \throw InvalidInput otherwise.
+PatternKind parse_pattern_kind(const std::string& name);
+
+//! Project `image` through `camera` (aspect = image aspect) onto the positions like a slide projector: each
+//! vertex gets the bilinearly sampled colour (RGB in [0,1]) of the pixel it projects to, `outside` when it
+//! projects outside the image or behind the camera. `outside_count`, when given, receives how many did.
+//! \throw InvalidInput for an empty image or `outside` not of size 3.
+std::vector<float> project_image(std::span<const Vec3> positions, const Image& image, const Camera& camera,
+                                 std::span<const float> outside, std::size_t* outside_count = nullptr);
+
+//! Linear blend (1 - t) a + t b of two fields of the same size (the morph of §5 blends forward- and
+//! backward-propagated colours this way). \throw InvalidInput on different sizes.
+std::vector<float> blend_fields(std::span<const float> a, std::span<const float> b, double t);
+
+}  // namespace topotrack

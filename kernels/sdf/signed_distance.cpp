@@ -1,0 +1,83 @@
+#include "kernels/sdf/signed_distance.hpp"
+
+#include <cmath>
+#include <mutex>
+#include <openvdb/tools/MeshToVolume.h>
+
+#include "kernels/mesh/mesh_convert.hpp"
+
+namespace topotrack {
+namespace {
+
+// OpenVDB's MeshDataAdapter over our arrays: no float copy of the positions, index space on the fly.
+class TriangleAdapter {
+public:
+  TriangleAdapter(std::span<const Vec3> p, std::span<const std::array<Index, 3>> t, double inv_h)
+      : p_(p), t_(t), inv_h_(inv_h) {}
+  std::size_t polygonCount() const { return t_.size(); }
+  std::size_t pointCount() const { return p_.size(); }
+  std::size_t vertexCount(std::size_t) const { return 3; }
+  void getIndexSpacePoint(std::size_t n, std::size_t v, openvdb::Vec3d& pos) const {
+    const Vec3& q = p_[t_[n][v]];
+    pos = openvdb::Vec3d(q.x() * inv_h_, q.y() * inv_h_, q.z() * inv_h_);
+  }
+
+private:
+  std::span<const Vec3> p_;
+  std::span<const std::array<Index, 3>> t_;
+  double inv_h_;
+};
+
+}  // namespace
+
+void ensure_openvdb_initialized() {
+  static std::once_flag once;
+  std::call_once(once, [] { openvdb::initialize(); });
+}
+
+openvdb::math::Transform::Ptr voxel_transform(double voxel_size) {
+  if (!std::isfinite(voxel_size) || voxel_size <= 0)
+    TT_THROW(InvalidInput, "signed distance: voxel size must be finite and positive, got " << voxel_size);
+  try {
+    return openvdb::math::Transform::createLinearTransform(voxel_size);
+  } catch (const openvdb::Exception& e) {
+    TT_THROW(InvalidInput, "signed distance: voxel size " << voxel_size << " rejected by OpenVDB: " << e.what());
+  }
+}
+
+openvdb::FloatGrid::Ptr signed_distance(std::span<const Vec3> positions,
+                                        std::span<const std::array<Index, 3>> triangles, double voxel_size,
+                                        double half_width_voxels) {
+  ensure_openvdb_initialized();
+  auto xform = voxel_transform(voxel_size);
+  if (!std::isfinite(half_width_voxels) || half_width_voxels < 1.0)
+    TT_THROW(InvalidInput, "signed distance: half width must be at least 1 voxel, got " << half_width_voxels);
+  for (std::size_t i = 0; i < positions.size(); ++i)
+    if (!positions[i].allFinite()) TT_THROW(InvalidInput, "signed distance: vertex " << i << " is not finite");
+  for (std::size_t f = 0; f < triangles.size(); ++f)
+    for (Index v : triangles[f])
+      if (v >= positions.size())
+        TT_THROW(InvalidInput, "signed distance: triangle " << f << " has vertex index " << v << " out of range ("
+                                                            << positions.size() << " vertices)");
+  const float hw = static_cast<float>(half_width_voxels);
+  openvdb::FloatGrid::Ptr grid;
+  if (triangles.empty()) {
+    grid = openvdb::FloatGrid::create(static_cast<float>(voxel_size * half_width_voxels));
+  } else {
+    TriangleAdapter mesh(positions, triangles, 1.0 / voxel_size);
+    openvdb::util::NullInterrupter interrupter;
+    grid = openvdb::tools::meshToVolume<openvdb::FloatGrid>(interrupter, mesh, *xform, hw, hw, 0, nullptr);
+  }
+  grid->setTransform(xform);
+  grid->setGridClass(openvdb::GRID_LEVEL_SET);
+  return grid;
+}
+
+openvdb::FloatGrid::Ptr signed_distance(const SurfaceMesh& mesh, double voxel_size, double half_width_voxels) {
+  std::vector<Vec3> positions;
+  std::vector<std::array<Index, 3>> triangles;
+  extract_triangles(mesh, positions, triangles);
+  return signed_distance(positions, triangles, voxel_size, half_width_voxels);
+}
+
+}  // namespace topotrack

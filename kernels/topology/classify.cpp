@@ -1,0 +1,289 @@
+#include "kernels/topology/classify.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
+
+#include "kernels/sdf/cube_table.hpp"
+
+namespace topotrack::topology {
+namespace {
+
+// A directed piece edge between cell-local vertex ids, with the cube face it lies on (or kOnMeshEdge).
+struct DirEdge {
+  std::uint32_t from, to;
+  std::uint8_t tag = kOnMeshEdge;
+  bool operator<(const DirEdge& o) const { return from != o.from ? from < o.from : to < o.to; }
+};
+
+struct Scratch {
+  std::vector<DirEdge> edges, boundary;
+  std::vector<PointKey> verts;
+  std::vector<std::uint32_t> corner, parent;
+  std::vector<std::uint8_t> used;
+  std::vector<int> loop;
+  std::vector<std::uint32_t> loop_root;
+  std::vector<std::array<double, 4>> seg;  // 2D segments on one face
+  std::vector<std::array<std::uint32_t, 2>> seg_id;
+};
+
+double orient2(double ax, double ay, double bx, double by, double cx, double cy) {
+  return (bx - ax) * (cy - ay) - (by - ay) * (cx - ax);
+}
+
+// Whether two of M's cut curves cross on a face of the cell (Wojtan et al. 2009 face test; a crossing
+// means two sheets of M intersect there, which the loop matching cannot see).
+bool curves_cross(const SurfaceMesh& mesh, const LatticeCut& cut, Scratch& s) {
+  for (int f = 0; f < 6; ++f) {
+    // Only faces holding two segments that are not one chain can have a crossing.
+    int n = 0;
+    const DirEdge* first = nullptr;
+    bool needed = false;
+    for (const DirEdge& e : s.boundary) {
+      if (e.tag != f) continue;
+      if (++n == 1) first = &e;
+      else if (n > 2 || (e.from != first->to && e.to != first->from)) needed = true;
+    }
+    if (!needed) continue;
+    const int axis = f >> 1, ua = axis == 0 ? 1 : 0, va = axis == 2 ? 1 : 2;
+    s.seg.clear();
+    s.seg_id.clear();
+    for (const DirEdge& e : s.boundary) {
+      if (e.tag != f) continue;
+      const Vec3 a = point_position(mesh, cut.P, s.verts[e.from]), b = point_position(mesh, cut.P, s.verts[e.to]);
+      s.seg.push_back({a[ua], a[va], b[ua], b[va]});
+      s.seg_id.push_back({e.from, e.to});
+    }
+    for (std::size_t i = 0; i < s.seg.size(); ++i)
+      for (std::size_t j = i + 1; j < s.seg.size(); ++j) {
+        const auto& ki = s.seg_id[i];
+        const auto& kj = s.seg_id[j];
+        if (ki[0] == kj[0] || ki[0] == kj[1] || ki[1] == kj[0] || ki[1] == kj[1]) continue;
+        const auto& p = s.seg[i];
+        const auto& q = s.seg[j];
+        const double o1 = orient2(p[0], p[1], p[2], p[3], q[0], q[1]), o2 = orient2(p[0], p[1], p[2], p[3], q[2], q[3]);
+        const double o3 = orient2(q[0], q[1], q[2], q[3], p[0], p[1]), o4 = orient2(q[0], q[1], q[2], q[3], p[2], p[3]);
+        if (((o1 > 0 && o2 < 0) || (o1 < 0 && o2 > 0)) && ((o3 > 0 && o4 < 0) || (o3 < 0 && o4 > 0))) return true;
+      }
+  }
+  return false;
+}
+
+std::uint32_t find(std::vector<std::uint32_t>& p, std::uint32_t x) {
+  while (p[x] != x) x = p[x] = p[p[x]];
+  return x;
+}
+
+// The cube edge of cell `c` that a face point lies on, or -1.
+int cube_edge_of(const PointKey& k, const openvdb::Coord& c) {
+  const int line = key_axis(k);
+  const int ua = line == 0 ? 1 : 0, va = line == 2 ? 1 : 2;
+  const int bu = key_plane_u(k) - c[ua], bv = key_plane_v(k) - c[va];
+  if ((bu != 0 && bu != 1) || (bv != 0 && bv != 1)) return -1;
+  return 4 * line + bu + 2 * bv;
+}
+
+bool same_cycle(const std::vector<int>& loop, std::span<const std::uint8_t> poly) {
+  const std::size_t n = poly.size();
+  if (loop.size() != n) return false;
+  std::size_t s = 0;
+  while (s < n && poly[s] != loop[0]) ++s;
+  if (s == n) return false;
+  for (std::size_t i = 0; i < n; ++i)
+    if (poly[(s + i) % n] != loop[i]) return false;
+  return true;
+}
+
+bool is_complex(const SurfaceMesh& mesh, const LatticeCut& cut, const CellIndex& index, std::size_t ci,
+                std::uint8_t mask, Scratch& s) {
+  const std::uint32_t pb = index.piece_begin[ci], pe = index.piece_begin[ci + 1];
+  if (pb == pe) return mask != 0 && mask != 255;
+  const openvdb::Coord C = cell_from_key(index.cells[ci]);
+  // Cell-local vertex ids.
+  s.verts.clear();
+  for (std::uint32_t k = pb; k < pe; ++k) {
+    const Piece& pc = cut.pieces[index.piece_order[k]];
+    s.verts.insert(s.verts.end(), cut.keys.begin() + pc.begin, cut.keys.begin() + pc.begin + pc.size);
+  }
+  const std::size_t corners = s.verts.size();
+  s.corner.resize(corners);
+  {
+    std::size_t c = 0;
+    for (std::uint32_t k = pb; k < pe; ++k) {
+      const Piece& pc = cut.pieces[index.piece_order[k]];
+      for (int i = 0; i < pc.size; ++i) s.corner[c++] = 0;  // filled below
+    }
+  }
+  std::sort(s.verts.begin(), s.verts.end());
+  s.verts.erase(std::unique(s.verts.begin(), s.verts.end()), s.verts.end());
+  const std::size_t V = s.verts.size();
+  s.edges.clear();
+  {
+    std::size_t c = 0;
+    for (std::uint32_t k = pb; k < pe; ++k) {
+      const Piece& pc = cut.pieces[index.piece_order[k]];
+      const std::size_t c0 = c;
+      for (int i = 0; i < pc.size; ++i)
+        s.corner[c++] = std::uint32_t(std::lower_bound(s.verts.begin(), s.verts.end(), cut.keys[pc.begin + i]) -
+                                      s.verts.begin());
+      for (int i = 0; i < pc.size; ++i)
+        s.edges.push_back({s.corner[c0 + i], s.corner[c0 + (i + 1) % pc.size], cut.tags[pc.begin + i]});
+    }
+  }
+  std::sort(s.edges.begin(), s.edges.end());
+  for (std::size_t i = 1; i < s.edges.size(); ++i)
+    if (s.edges[i].from == s.edges[i - 1].from && s.edges[i].to == s.edges[i - 1].to) return true;
+  s.parent.resize(V);
+  std::iota(s.parent.begin(), s.parent.end(), 0u);
+  s.boundary.clear();
+  std::size_t components = V;
+  for (const DirEdge& e : s.edges) {
+    const std::uint32_t a = find(s.parent, e.from), b = find(s.parent, e.to);
+    if (a != b) {
+      s.parent[std::max(a, b)] = std::min(a, b);
+      --components;
+    }
+    if (!std::binary_search(s.edges.begin(), s.edges.end(), DirEdge{e.to, e.from, 0})) s.boundary.push_back(e);
+  }
+  const std::size_t E = (s.edges.size() + s.boundary.size()) / 2;
+  const long chi = long(V) - long(E) + long(pe - pb);
+  // Boundary loops; s.boundary is sorted by `from`. A vertex with two outgoing boundary edges is a pinch.
+  for (std::size_t i = 1; i < s.boundary.size(); ++i)
+    if (s.boundary[i].from == s.boundary[i - 1].from) return true;
+  const cube::CubePolygons& polys = cube::cube_polygons(mask);
+  s.used.assign(s.boundary.size() + polys.count, 0);
+  std::uint8_t* poly_used = s.used.data() + s.boundary.size();
+  s.loop_root.clear();
+  for (std::size_t start = 0; start < s.boundary.size(); ++start) {
+    if (s.used[start]) continue;
+    s.loop.clear();
+    std::size_t cur = start;
+    for (std::size_t steps = 0;; ++steps) {
+      if (s.used[cur] || steps > s.boundary.size()) return true;
+      s.used[cur] = 1;
+      if (s.boundary[cur].tag == kOnMeshEdge) return true;  // M has a boundary here
+      const PointKey& k = s.verts[s.boundary[cur].from];
+      if (kind(k) == PointKind::FacePoint) {
+        const int e = cube_edge_of(k, C);
+        if (e < 0) return true;
+        s.loop.push_back(e);
+      }
+      const auto it = std::lower_bound(s.boundary.begin(), s.boundary.end(), DirEdge{s.boundary[cur].to, 0, 0});
+      if (it == s.boundary.end() || it->from != s.boundary[cur].to) return true;  // open chain
+      cur = std::size_t(it - s.boundary.begin());
+      if (cur == start) break;
+    }
+    if (s.loop.empty()) return true;
+    int match = -1;
+    for (int p = 0; p < polys.count && match < 0; ++p)
+      if (!poly_used[p] && same_cycle(s.loop, polys.polygon(p))) match = p;
+    if (match < 0) return true;
+    poly_used[match] = 1;
+    s.loop_root.push_back(find(s.parent, s.boundary[start].from));
+  }
+  if (s.loop_root.size() != polys.count) return true;
+  // One loop per component and every component a disk.
+  std::sort(s.loop_root.begin(), s.loop_root.end());
+  if (std::adjacent_find(s.loop_root.begin(), s.loop_root.end()) != s.loop_root.end()) return true;
+  if (components != s.loop_root.size()) return true;
+  if (chi != long(s.loop_root.size())) return true;
+  return s.boundary.size() > 2 && curves_cross(mesh, cut, s);
+}
+
+}  // namespace
+
+std::pair<std::uint32_t, std::uint32_t> CellIndex::pieces_of(std::uint64_t cell) const {
+  const auto it = std::lower_bound(cells.begin(), cells.end(), cell);
+  if (it == cells.end() || *it != cell) return {0, 0};
+  const std::size_t i = std::size_t(it - cells.begin());
+  return {piece_begin[i], piece_begin[i + 1]};
+}
+
+std::uint8_t theta_mask(const openvdb::FloatGrid::ConstAccessor& acc, const openvdb::Coord& cell) {
+  std::uint8_t m = 0;
+  for (int c = 0; c < 8; ++c)
+    if (acc.getValue(cell.offsetBy(c & 1, (c >> 1) & 1, (c >> 2) & 1)) < 0.f) m |= std::uint8_t(1u << c);
+  return m;
+}
+
+CellIndex index_cells(const LatticeCut& cut, const openvdb::FloatGrid& theta) {
+  CellIndex idx;
+  const std::size_t np = cut.pieces.size();
+  std::vector<std::pair<std::uint64_t, std::uint32_t>> by_cell(np);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, np, 8192), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t i = r.begin(); i != r.end(); ++i) by_cell[i] = {cut.pieces[i].cell, std::uint32_t(i)};
+  });
+  tbb::parallel_sort(by_cell.begin(), by_cell.end());
+
+  // Θ's sign-change cells, per leaf node.
+  std::vector<const openvdb::FloatTree::LeafNodeType*> leaves;
+  theta.tree().getNodes(leaves);
+  std::vector<std::vector<std::uint64_t>> leaf_cells(leaves.size());
+  const float limit = float(1.8 * theta.voxelSize()[0]);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, leaves.size(), 16), [&](const tbb::blocked_range<std::size_t>& r) {
+    auto acc = theta.getConstAccessor();
+    for (std::size_t l = r.begin(); l != r.end(); ++l) {
+      for (auto it = leaves[l]->cbeginValueOn(); it; ++it) {
+        // A corner value beyond the cell diagonal means no sign change in the cell (Θ is a distance).
+        if (std::abs(*it) > limit) continue;
+        const openvdb::Coord c = it.getCoord();
+        const std::uint8_t m = theta_mask(acc, c);
+        if (m != 0 && m != 255) {
+          bool in_range = true;
+          for (int a = 0; a < 3; ++a) in_range = in_range && std::abs(c[a]) < kCellRange - 4;
+          if (in_range) leaf_cells[l].push_back(cell_key(c));
+        }
+      }
+    }
+  });
+  std::vector<std::uint64_t> sign_cells;
+  for (const auto& v : leaf_cells) sign_cells.insert(sign_cells.end(), v.begin(), v.end());
+  tbb::parallel_sort(sign_cells.begin(), sign_cells.end());
+
+  idx.cells.reserve(sign_cells.size() + np / 2);
+  idx.piece_order.resize(np);
+  idx.piece_begin.reserve(sign_cells.size() + np / 2 + 1);
+  std::size_t i = 0, j = 0;
+  while (i < np || j < sign_cells.size()) {
+    const std::uint64_t c = (j == sign_cells.size() || (i < np && by_cell[i].first <= sign_cells[j]))
+                                ? by_cell[i].first
+                                : sign_cells[j];
+    idx.cells.push_back(c);
+    idx.piece_begin.push_back(std::uint32_t(i));
+    while (i < np && by_cell[i].first == c) {
+      idx.piece_order[i] = by_cell[i].second;
+      ++i;
+    }
+    while (j < sign_cells.size() && sign_cells[j] == c) ++j;
+  }
+  idx.piece_begin.push_back(std::uint32_t(np));
+  return idx;
+}
+
+std::vector<std::uint64_t> complex_cells(const SurfaceMesh& mesh, const LatticeCut& cut, const CellIndex& index, const openvdb::FloatGrid& theta) {
+  const std::size_t n = index.cells.size();
+  std::vector<std::uint8_t> flag(n, 0);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 256), [&](const tbb::blocked_range<std::size_t>& r) {
+    auto acc = theta.getConstAccessor();
+    Scratch s;
+    for (std::size_t i = r.begin(); i != r.end(); ++i) {
+      const std::uint8_t mask = theta_mask(acc, cell_from_key(index.cells[i]));
+      flag[i] = is_complex(mesh, cut, index, i, mask, s) ? 1 : 0;
+    }
+  });
+  std::vector<std::uint64_t> out;
+  for (std::size_t i = 0; i < n; ++i)
+    if (flag[i]) out.push_back(index.cells[i]);
+  for (const auto& box : cut.bad_boxes)
+    for (int x = box[0].x(); x <= box[1].x(); ++x)
+      for (int y = box[0].y(); y <= box[1].y(); ++y)
+        for (int z = box[0].z(); z <= box[1].z(); ++z) out.push_back(cell_key(openvdb::Coord(x, y, z)));
+  std::sort(out.begin(), out.end());
+  out.erase(std::unique(out.begin(), out.end()), out.end());
+  return out;
+}
+
+}  // namespace topotrack::topology

@@ -1,0 +1,197 @@
+#include "kernels/topology/constrain.hpp"
+
+#include <chrono>
+#include <cmath>
+
+#include "kernels/mesh/mesh_queries.hpp"
+#include "kernels/topology/classify.hpp"
+#include "kernels/topology/lattice_cut.hpp"
+#include "kernels/topology/patch_march.hpp"
+#include "kernels/topology/replace.hpp"
+
+namespace topotrack {
+namespace {
+
+using namespace topology;
+using Clock = std::chrono::steady_clock;
+double since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+
+// Weights of every output vertex that is not a kept vertex of M: derived points over old vertices, patch
+// vertices by the §4.4 march over output vertices.
+struct Weights {
+  std::vector<PointWeights> derived;        // per derived vertex, over old vertex handles
+  std::vector<MarchedPatch> created;        // over output vertex indices
+  std::vector<MarchedPatch> deleted;        // over old vertex handles
+};
+
+template <class T>
+bool carry_property(const SurfaceMesh& old_mesh, SurfaceMesh& out, const std::string& name, const Assembly& A,
+                    const Weights& W) {
+  const VertexProperty<T> src = old_mesh.get_vertex_property<T>(name);
+  if (!src.is_valid()) return false;
+  const int w = src.width();
+  VertexProperty<T> dst = out.add_vertex_property<T>(name, w);
+  for (std::size_t i = 0; i < A.n_kept(); ++i)
+    for (int c = 0; c < w; ++c) dst(Vertex(Index(i)), c) = src(Vertex(A.kept_old[i]), c);
+  for (std::size_t i = 0; i < A.n_derived(); ++i) {
+    const PointWeights& pw = W.derived[i];
+    for (int c = 0; c < w; ++c) {
+      double s = 0;
+      for (int k = 0; k < pw.n; ++k) s += pw.w[k] * double(src(pw.v[k], c));
+      dst(Vertex(Index(A.n_kept() + i)), c) = static_cast<T>(std::is_integral_v<T> ? std::round(s) : s);
+    }
+  }
+  for (const MarchedPatch& P : W.created)
+    for (std::size_t r = 0; r < P.ruled; ++r)
+      for (int c = 0; c < w; ++c) {
+        double s = 0;
+        for (std::uint32_t k = P.rule_begin[r]; k < P.rule_begin[r + 1]; ++k)
+          s += P.terms[k].second * double(dst(Vertex(P.terms[k].first), c));
+        dst(Vertex(P.order[r]), c) = static_cast<T>(std::is_integral_v<T> ? std::round(s) : s);
+      }
+  return true;
+}
+
+void record(const SurfaceMesh& old_mesh, const SurfaceMesh& out, const Assembly& A, const Weights& W,
+            EventList& events) {
+  // Cut points of kept triangles: edge splits and triangle subdivisions with their exact weights.
+  for (std::size_t i = 0; i < A.n_derived(); ++i) {
+    const PointWeights& pw = W.derived[i];
+    const VertexId id = out.id(Vertex(Index(A.n_kept() + i)));
+    if (pw.n == 2) events.record_split(old_mesh.id(pw.v[0]), old_mesh.id(pw.v[1]), id, pw.w[0]);
+    else
+      events.record_subdivide(old_mesh.id(pw.v[0]), old_mesh.id(pw.v[1]), old_mesh.id(pw.v[2]), id, pw.w[0], pw.w[1],
+                              pw.w[2]);
+  }
+  std::vector<RuleTerm> terms;
+  for (const MarchedPatch& P : W.deleted) {
+    events.begin_event(EventKind::PatchDelete);
+    for (Index v : P.order) events.add_in(old_mesh.id(Vertex(v)));
+    for (Index v : P.boundary) events.add_in(old_mesh.id(Vertex(v)));
+    for (Index v : P.boundary) events.add_out(old_mesh.id(Vertex(v)));
+    for (std::size_t r = 0; r < P.ruled; ++r) {
+      terms.clear();
+      for (std::uint32_t k = P.rule_begin[r]; k < P.rule_begin[r + 1]; ++k)
+        terms.push_back({old_mesh.id(Vertex(P.terms[k].first)), P.terms[k].second});
+      events.add_backward_rule(old_mesh.id(Vertex(P.order[r])), terms);
+    }
+    events.end_event();
+  }
+  for (const MarchedPatch& P : W.created) {
+    events.begin_event(EventKind::PatchCreate);
+    for (Index v : P.boundary) events.add_in(out.id(Vertex(v)));
+    for (Index v : P.boundary) events.add_out(out.id(Vertex(v)));
+    for (Index v : P.order) events.add_out(out.id(Vertex(v)));
+    for (std::size_t r = 0; r < P.ruled; ++r) {
+      terms.clear();
+      for (std::uint32_t k = P.rule_begin[r]; k < P.rule_begin[r + 1]; ++k)
+        terms.push_back({out.id(Vertex(P.terms[k].first)), P.terms[k].second});
+      events.add_forward_rule(out.id(Vertex(P.order[r])), terms);
+    }
+    events.end_event();
+  }
+}
+
+}  // namespace
+
+ConstrainReport constrain_topology(SurfaceMesh& mesh, const openvdb::FloatGrid& theta, const ConstrainParams& params,
+                                   EventList* events) {
+  const auto t0 = Clock::now();
+  ConstrainReport report;
+  const openvdb::math::Transform& xform = theta.transform();
+  if (!xform.isLinear()) TT_THROW(InvalidInput, "constrain topology: the level set's transform is not linear");
+  if (params.max_region_growth < 0)
+    TT_THROW(InvalidInput, "constrain topology: max_region_growth must be >= 0, got " << params.max_region_growth);
+
+  LatticeCut cut = cut_by_lattice(mesh, xform);
+  report.seconds_cut = since(t0);
+  const CellIndex index = index_cells(cut, theta);
+  std::vector<std::uint64_t> region = complex_cells(mesh, cut, index, theta);
+  report.bad_faces = cut.bad_faces.size();
+  report.seconds_classify = since(t0);
+  if (region.empty()) {
+    report.components_before = report.components_after = int(connected_components(mesh));
+    report.seconds_total = since(t0);
+    return report;
+  }
+  report.components_before = int(connected_components(mesh));
+
+  // Replacement, growing the region when a check fails (§4.3: "if a local repair fails, grow").
+  const auto t1 = Clock::now();
+  Assembly A;
+  SurfaceMesh result;
+  std::string why;
+  for (int attempt = 0;; ++attempt) {
+    bool ok = assemble(mesh, cut, index, region, theta, A, why);
+    if (ok) {
+      std::vector<VertexId> ids(A.positions.size());
+      for (std::size_t i = 0; i < A.n_kept(); ++i) ids[i] = mesh.id(Vertex(A.kept_old[i]));
+      for (std::size_t i = A.n_kept(); i < ids.size(); ++i) ids[i] = mesh.next_id() + (i - A.n_kept());
+      try {
+        result = SurfaceMesh::from_triangles(A.positions, A.triangles, ids);
+        result.validate(true);
+        result.set_next_id(mesh.next_id() + (ids.size() - A.n_kept()));
+      } catch (const Error& e) {
+        ok = false;
+        why = e.what();
+      }
+    }
+    if (ok) break;
+    if (attempt >= params.max_region_growth)
+      TT_THROW(TopologyError, "constrain topology: replacement failed after growing the complex region "
+                                  << attempt << " times: " << why);
+    region = grow_region(region);
+    ++report.region_growth;
+  }
+  report.complex_cells = region.size();
+  report.seconds_replace = since(t1);
+
+  // §4.4: weights of the new vertices, then events and carried properties.
+  const auto t2 = Clock::now();
+  Weights W;
+  W.derived.resize(A.n_derived());
+  for (std::size_t i = 0; i < A.n_derived(); ++i) {
+    const PointKey& k = A.derived[i];
+    if (kind(k) == PointKind::Other) {
+      const auto vs = mesh.vertices(Face(key_element(k)));
+      W.derived[i] = PointWeights{3, vs, {1.0 / 3, 1.0 / 3, 1.0 / 3}};
+    } else {
+      point_position(mesh, cut.P, k, &W.derived[i]);
+    }
+  }
+  {
+    std::vector<std::uint32_t> adj_begin;
+    std::vector<Index> adj;
+    mesh_adjacency(mesh, adj_begin, adj);
+    std::vector<std::uint8_t> gone(mesh.vertices_size(), 0);
+    for (Index v : A.deleted_old) gone[v] = 1;
+    W.deleted = march_patches(gone, adj_begin, adj);
+    mesh_adjacency(result, adj_begin, adj);
+    std::vector<std::uint8_t> fresh(result.vertices_size(), 0);
+    for (std::size_t i = A.n_kept() + A.n_derived(); i < fresh.size(); ++i) fresh[i] = 1;
+    W.created = march_patches(fresh, adj_begin, adj);
+  }
+  if (events && params.record_events) record(mesh, result, A, W, *events);
+  for (const std::string& name : mesh.vertex_property_names()) {
+    carry_property<float>(mesh, result, name, A, W) || carry_property<double>(mesh, result, name, A, W) ||
+        carry_property<std::int32_t>(mesh, result, name, A, W) ||
+        carry_property<std::uint32_t>(mesh, result, name, A, W) ||
+        carry_property<std::int64_t>(mesh, result, name, A, W) ||
+        carry_property<std::uint64_t>(mesh, result, name, A, W) ||
+        carry_property<std::uint8_t>(mesh, result, name, A, W) || carry_property<std::int8_t>(mesh, result, name, A, W);
+  }
+  report.seconds_events = since(t2);
+
+  report.faces_removed = A.live_faces - A.faces_kept;
+  report.faces_added = A.triangles.size() - A.faces_kept;
+  report.vertices_removed = A.deleted_old.size();
+  report.vertices_added = A.positions.size() - A.n_kept();
+  report.patches_created = W.created.size();
+  report.patches_deleted = W.deleted.size();
+  mesh = std::move(result);
+  report.components_after = int(connected_components(mesh));
+  report.seconds_total = since(t0);
+  return report;
+}
+
+}  // namespace topotrack

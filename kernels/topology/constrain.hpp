@@ -1,0 +1,75 @@
+#pragma once
+//! ConstrainTopology(M, Θ) of §4.3: make the tracked mesh M take the topology of a voxelized implicit
+//! surface Θ, after Wojtan et al. 2009 ("Deforming meshes that split and merge") as the paper generalises
+//! it to any Θ. Called as ConstrainTopology(M, φ_M) (self-intersections become merges) and as
+//! ConstrainTopology(M, φ_S) (M takes the target's topology: splits, merges, components appearing and
+//! vanishing) in Algorithm 1, lines 9 and 11.
+//!
+//! Method.
+//!  1. Cells are the cubes between Θ's voxel centres (the marching-cubes cells of kernels/sdf). M is cut
+//!     exactly along the lattice planes into one convex piece per cell and triangle (lattice_cut.hpp).
+//!  2. Each cell is classified in parallel (classify.hpp): it is complex unless M ∩ cell is a set of disks
+//!     whose boundary loops run through the cube-edge crossings exactly like the marching-cubes polygons
+//!     of Θ's corner signs.
+//!  3. Replacement with exact cutting (our choice of stitching, instead of the subdivision stitching of
+//!     Wojtan et al. 2010): the pieces of M in complex cells are removed, the pieces in the other cells kept.
+//!     The cut boundary of the kept part lies on faces between a complex and a simple cell, and on each
+//!     such face it is, by the simple cell's classification, a set of curves joining the same cube-edge
+//!     crossings as the marching-cubes face segments of Θ. Each marching-cubes polygon of a complex cell
+//!     uses M's own crossing point as its vertex on every lattice edge that touches a simple cell, and
+//!     along a face shared with a simple cell it follows M's cut curve instead of the straight segment;
+//!     polygons that picked up curve points are fanned from a new centroid vertex. The result is a
+//!     closed, oriented 2-manifold by construction; it is checked (SurfaceMesh::from_triangles and
+//!     validate), and should a check ever fail the complex region is grown by one cell layer and the
+//!     replacement redone, up to `max_region_growth` times.
+//!  4. Events (§4.4), in this order: the points where the cut subdivides kept triangles (edge splits and
+//!     triangle subdivisions with exact interpolation weights); one PatchDelete per connected patch of
+//!     removed vertices (backward rules by breadth-first march from the kept vertices around it, each
+//!     vertex averaging its already-visited neighbours); one PatchCreate per connected patch of new
+//!     vertices (forward rules by the same march from the kept vertices around it). A patch with no
+//!     vertex around it (a component vanishing or appearing) gets its vertex sets and no rule.
+//!
+//! The mesh is rebuilt: it comes out compacted, vertex handles change, persistent ids of kept vertices
+//! are kept and new vertices get fresh ids. Vertex properties of arithmetic type (float, double, integer)
+//! are carried over with the same weights as the events; properties of other types are dropped. When no
+//! cell is complex the mesh is not touched at all and no event is recorded.
+#include <cstddef>
+#include <openvdb/openvdb.h>
+
+#include "io/event_list.hpp"
+#include "kernels/mesh/surface_mesh.hpp"
+
+namespace topotrack {
+
+struct ConstrainParams {
+  // Cells are Θ's voxels (the voxel size is chosen when Θ is computed: ConstrainTopologyParams of the caller).
+  bool record_events = true;   //!< append §4.4 events when an EventList is given
+  int max_region_growth = 4;   //!< layers the complex region may grow by when a replacement check fails
+};
+
+struct ConstrainReport {
+  std::size_t complex_cells = 0;     //!< cells replaced (after any growth)
+  std::size_t faces_removed = 0;     //!< triangles of M not kept intact
+  std::size_t faces_added = 0;       //!< triangles of the result that are not triangles of M
+  std::size_t vertices_removed = 0;  //!< vertices of M removed
+  std::size_t vertices_added = 0;    //!< new vertices (cut points, patch vertices, centroids)
+  std::size_t patches_created = 0, patches_deleted = 0;
+  std::size_t bad_faces = 0;         //!< faces whose clipping fell back to whole-box replacement
+  int region_growth = 0;             //!< layers the region grew by
+  int components_before = 0, components_after = 0;
+  double seconds_cut = 0;       //!< cutting M by the lattice
+  double seconds_classify = 0;  //!< cutting and classification
+  double seconds_replace = 0;   //!< removal, marching-cubes patch, stitching, rebuild
+  double seconds_events = 0;    //!< event and property propagation
+  double seconds_total = 0;
+};
+
+//! ConstrainTopology(M, Θ) of §4.3; Θ is a narrow-band level set (negative inside), its voxel lattice the
+//! cells. \pre mesh is a closed, consistently oriented 2-manifold (outward normals); Θ's transform is
+//! linear (any voxel size) and its band is at least 2 voxels wide on each side.
+//! \throw InvalidInput on a non-finite or out-of-range coordinate or a non-linear transform;
+//! TopologyError when the replacement still fails after max_region_growth growths.
+ConstrainReport constrain_topology(SurfaceMesh& mesh, const openvdb::FloatGrid& theta, const ConstrainParams& params = {},
+                                   EventList* events = nullptr);
+
+}  // namespace topotrack

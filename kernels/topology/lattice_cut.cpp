@@ -1,0 +1,339 @@
+#include "kernels/topology/lattice_cut.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include "io/error.hpp"
+
+namespace topotrack::topology {
+namespace {
+
+constexpr std::uint64_t kPlaneBias = std::uint64_t(1) << 31;
+constexpr std::int64_t kCellBias = std::int64_t(1) << 20;
+
+// The carrier of a polygon edge: a mesh edge (axis < 0, value = edge index) or a lattice plane inside
+// the face (axis, value = plane).
+struct Carrier {
+  int axis = -1;
+  int value = 0;
+};
+struct PV {
+  PointKey key;
+  Vec3 p;
+  Carrier c;  // of the edge from this corner to the next
+};
+using Poly = std::vector<PV>;
+
+struct Clipper {
+  const SurfaceMesh& mesh;
+  const std::vector<Vec3>& P;
+  Index face;
+  bool bad = false;
+
+  PV crossing(const Carrier& c, int axis, int plane) const {
+    PV x;
+    if (c.axis < 0) x.key = edge_point_key(Index(c.value), axis, plane);
+    else {
+      const int line = 3 - c.axis - axis;
+      const int a0 = std::min(c.axis, axis);
+      const int pu = a0 == c.axis ? c.value : plane, pv = a0 == c.axis ? plane : c.value;
+      x.key = face_point_key(face, line, pu, pv);
+    }
+    x.p = point_position(mesh, P, x.key);
+    return x;
+  }
+
+  // Split `in` by the plane into the part below (coordinate < plane) and the part above.
+  void split(const Poly& in, int axis, int plane, Poly& below, Poly& above) {
+    below.clear();
+    above.clear();
+    const std::size_t n = in.size();
+    int changes = 0;
+    for (std::size_t i = 0; i < n; ++i)
+      changes += (in[i].p[axis] >= plane) != (in[(i + 1) % n].p[axis] >= plane);
+    if (changes == 0) {
+      (in[0].p[axis] >= plane ? above : below) = in;
+      return;
+    }
+    if (changes != 2) {
+      bad = true;
+      return;
+    }
+    for (std::size_t i = 0; i < n; ++i) {
+      const PV& a = in[i];
+      const PV& b = in[(i + 1) % n];
+      const bool sa = a.p[axis] >= plane, sb = b.p[axis] >= plane;
+      (sa ? above : below).push_back(a);
+      if (sa != sb) {
+        PV x = crossing(a.c, axis, plane);
+        PV xa = x, xb = x;
+        xa.c = Carrier{axis, plane};  // on a's side the cut runs along the plane to the other crossing
+        xb.c = a.c;                   // on b's side the rest of a's edge follows
+        (sa ? above : below).push_back(xa);
+        (sb ? above : below).push_back(xb);
+      }
+    }
+  }
+};
+
+// Reused buffers of one chunk's clipping (no allocation per face once warm).
+struct ClipScratch {
+  Poly tri, below, above, rest;
+  std::vector<Poly> xs, ys;  // slabs and bars, first nx / ny used
+  std::vector<int> xc, yc;
+};
+
+struct Chunk {
+  ClipScratch scratch;
+  std::vector<Piece> pieces;
+  std::vector<std::uint32_t> face_count;  // pieces per face of the chunk
+  std::vector<PointKey> keys;
+  std::vector<std::uint8_t> tags;
+  std::vector<Index> bad_faces;
+  std::vector<std::array<openvdb::Coord, 2>> bad_boxes;
+};
+
+int cell_of(double x) { return int(std::floor(x)); }
+
+void emit(Chunk& out, Index f, const openvdb::Coord& cell, const Poly& poly) {
+  Piece pc;
+  pc.cell = cell_key(cell);
+  pc.face = f;
+  pc.begin = std::uint32_t(out.keys.size());
+  pc.size = std::uint8_t(poly.size());
+  for (const PV& v : poly) {
+    out.keys.push_back(v.key);
+    if (v.c.axis < 0) out.tags.push_back(kOnMeshEdge);
+    else out.tags.push_back(std::uint8_t(2 * v.c.axis + (v.c.value - cell[v.c.axis])));
+  }
+  out.pieces.push_back(pc);
+}
+
+// Clip one face into its cell pieces, axis by axis, planes in increasing order.
+void clip_face(const SurfaceMesh& mesh, const std::vector<Vec3>& P, Index f, Chunk& out) {
+  Poly& tri = out.scratch.tri;
+  tri.clear();
+  Halfedge h = mesh.halfedge(Face(f));
+  for (int i = 0; i < 3; ++i, h = mesh.next(h)) {
+    const Vertex v = mesh.from_vertex(h);
+    tri.push_back(PV{vertex_key(v.idx), P[v.idx], Carrier{-1, int(SurfaceMesh::edge(h).idx)}});
+  }
+  std::array<int, 3> lo, hi;
+  for (int a = 0; a < 3; ++a) {
+    lo[a] = hi[a] = cell_of(tri[0].p[a]);
+    for (int i = 1; i < 3; ++i) {
+      lo[a] = std::min(lo[a], cell_of(tri[i].p[a]));
+      hi[a] = std::max(hi[a], cell_of(tri[i].p[a]));
+    }
+  }
+  const std::size_t first_piece = out.pieces.size(), first_key = out.keys.size();
+  if (lo == hi) {
+    emit(out, f, openvdb::Coord(lo[0], lo[1], lo[2]), tri);
+    out.face_count.push_back(1);
+    return;
+  }
+  Clipper clip{mesh, P, f};
+  ClipScratch& S = out.scratch;
+  Poly &below = S.below, &above = S.above, &rest = S.rest;
+  std::size_t nx = 0;
+  auto push_slab = [](std::vector<Poly>& pool, std::vector<int>& cells, std::size_t& n, int cell, const Poly& p) {
+    if (pool.size() <= n) pool.emplace_back(), cells.emplace_back();
+    pool[n] = p;
+    cells[n] = cell;
+    ++n;
+  };
+  rest = tri;
+  for (int p = lo[0] + 1; p <= hi[0] && !clip.bad; ++p) {
+    clip.split(rest, 0, p, below, above);
+    if (!below.empty()) push_slab(S.xs, S.xc, nx, p - 1, below);
+    rest.swap(above);
+  }
+  if (!rest.empty()) push_slab(S.xs, S.xc, nx, hi[0], rest);
+  for (std::size_t ix = 0; ix < nx && !clip.bad; ++ix) {
+    const Poly& slab = S.xs[ix];
+    const int cx = S.xc[ix];
+    int ylo = cell_of(slab[0].p[1]), yhi = ylo;
+    for (const PV& v : slab) ylo = std::min(ylo, cell_of(v.p[1])), yhi = std::max(yhi, cell_of(v.p[1]));
+    std::size_t ny = 0;
+    rest = slab;
+    for (int p = ylo + 1; p <= yhi && !clip.bad; ++p) {
+      clip.split(rest, 1, p, below, above);
+      if (!below.empty()) push_slab(S.ys, S.yc, ny, p - 1, below);
+      rest.swap(above);
+    }
+    if (!rest.empty()) push_slab(S.ys, S.yc, ny, yhi, rest);
+    for (std::size_t iy = 0; iy < ny && !clip.bad; ++iy) {
+      const Poly& bar = S.ys[iy];
+      const int cy = S.yc[iy];
+      int zlo = cell_of(bar[0].p[2]), zhi = zlo;
+      for (const PV& v : bar) zlo = std::min(zlo, cell_of(v.p[2])), zhi = std::max(zhi, cell_of(v.p[2]));
+      rest = bar;
+      for (int p = zlo + 1; p <= zhi && !clip.bad; ++p) {
+        clip.split(rest, 2, p, below, above);
+        if (!below.empty()) emit(out, f, openvdb::Coord(cx, cy, p - 1), below);
+        rest.swap(above);
+      }
+      if (!clip.bad && !rest.empty()) emit(out, f, openvdb::Coord(cx, cy, zhi), rest);
+    }
+  }
+  if (clip.bad) {
+    out.pieces.resize(first_piece);
+    out.keys.resize(first_key);
+    out.tags.resize(first_key);
+    out.bad_faces.push_back(f);
+    out.bad_boxes.push_back({openvdb::Coord(lo[0], lo[1], lo[2]), openvdb::Coord(hi[0], hi[1], hi[2])});
+  }
+  out.face_count.push_back(std::uint32_t(out.pieces.size() - first_piece));
+}
+
+}  // namespace
+
+PointKey vertex_key(Index v) { return {std::uint64_t(v), 0}; }
+PointKey edge_point_key(Index edge, int axis, int plane) {
+  return {(std::uint64_t(1) << 62) | (std::uint64_t(axis) << 60) | edge, std::uint64_t(std::int64_t(plane) + kPlaneBias)};
+}
+PointKey face_point_key(Index face, int line_axis, int plane_u, int plane_v) {
+  return {(std::uint64_t(2) << 62) | (std::uint64_t(line_axis) << 60) | face,
+          (std::uint64_t(std::int64_t(plane_u) + kPlaneBias) << 32) | std::uint64_t(std::int64_t(plane_v) + kPlaneBias)};
+}
+PointKey other_key(std::uint64_t a, std::uint64_t b) {
+  return {(std::uint64_t(3) << 62) | (a & ((std::uint64_t(1) << 62) - 1)), b};
+}
+
+std::uint64_t cell_key(const openvdb::Coord& c) {
+  return (std::uint64_t(c.x() + kCellBias) << 42) | (std::uint64_t(c.y() + kCellBias) << 21) |
+         std::uint64_t(c.z() + kCellBias);
+}
+openvdb::Coord cell_from_key(std::uint64_t k) {
+  const std::uint64_t m = (std::uint64_t(1) << 21) - 1;
+  return openvdb::Coord(int(std::int64_t((k >> 42) & m) - kCellBias), int(std::int64_t((k >> 21) & m) - kCellBias),
+                        int(std::int64_t(k & m) - kCellBias));
+}
+
+Vec3 point_position(const SurfaceMesh& mesh, const std::vector<Vec3>& P, const PointKey& key, PointWeights* wts) {
+  switch (kind(key)) {
+    case PointKind::Vertex: {
+      const Index v = key_element(key);
+      if (wts) *wts = PointWeights{1, {Vertex(v)}, {1.0}};
+      return P[v];
+    }
+    case PointKind::EdgePoint: {
+      const Edge e(key_element(key));
+      const int axis = key_axis(key);
+      const double plane = key_plane(key);
+      const Vertex u = mesh.vertex(e, 0), v = mesh.vertex(e, 1);
+      const Vec3& pu = P[u.idx];
+      const Vec3& pv = P[v.idx];
+      double t = (plane - pu[axis]) / (pv[axis] - pu[axis]);
+      if (!std::isfinite(t)) t = 0.5;
+      t = std::clamp(t, 0.0, 1.0);
+      Vec3 x = pu + t * (pv - pu);
+      x[axis] = plane;
+      if (wts) *wts = PointWeights{2, {u, v}, {1.0 - t, t}};
+      return x;
+    }
+    case PointKind::FacePoint: {
+      const Face f(key_element(key));
+      const int line = key_axis(key);
+      const int ua = line == 0 ? 1 : 0, va = line == 2 ? 1 : 2;
+      const double qu = key_plane_u(key), qv = key_plane_v(key);
+      const auto vs = mesh.vertices(f);
+      const Vec3& A = P[vs[0].idx];
+      const Vec3& B = P[vs[1].idx];
+      const Vec3& C = P[vs[2].idx];
+      const double b1u = B[ua] - A[ua], b1v = B[va] - A[va], c1u = C[ua] - A[ua], c1v = C[va] - A[va];
+      const double du = qu - A[ua], dv = qv - A[va];
+      const double det = b1u * c1v - c1u * b1v;
+      double s = 1.0 / 3, r = 1.0 / 3;
+      if (std::abs(det) > 1e-300) {
+        s = (du * c1v - c1u * dv) / det;
+        r = (b1u * dv - du * b1v) / det;
+      }
+      if (!std::isfinite(s) || !std::isfinite(r)) s = r = 1.0 / 3;
+      std::array<double, 3> w{1.0 - s - r, s, r};
+      double sum = 0;
+      for (double& x : w) sum += (x = std::max(0.0, x));
+      for (double& x : w) x = sum > 0 ? x / sum : 1.0 / 3;
+      Vec3 x = w[0] * A + w[1] * B + w[2] * C;
+      x[ua] = qu;
+      x[va] = qv;
+      if (wts) *wts = PointWeights{3, vs, w};
+      return x;
+    }
+    default:
+      TT_THROW(Error, "point_position: not a mesh subdivision point");
+  }
+}
+
+Vec3 cut_to_world(const openvdb::math::Transform& xform, const Vec3& p) {
+  const openvdb::Vec3d w = xform.indexToWorld(openvdb::Vec3d(p.x() - kShift[0], p.y() - kShift[1], p.z() - kShift[2]));
+  return {w.x(), w.y(), w.z()};
+}
+
+LatticeCut cut_by_lattice(const SurfaceMesh& mesh, const openvdb::math::Transform& xform) {
+  LatticeCut cut;
+  const std::size_t nv = mesh.vertices_size(), nf = mesh.faces_size();
+  cut.P.resize(nv);
+  std::vector<std::uint8_t> fault(nv, 0);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv, 4096), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t i = r.begin(); i != r.end(); ++i) {
+      const Vec3& w = mesh.positions()[i];
+      const openvdb::Vec3d q = xform.worldToIndex(openvdb::Vec3d(w.x(), w.y(), w.z()));
+      Vec3 p(q.x(), q.y(), q.z());
+      for (int a = 0; a < 3; ++a) {
+        if (mesh.is_deleted(Vertex(Index(i)))) break;
+        if (!std::isfinite(p[a])) fault[i] = 1;
+        else if (std::abs(p[a]) > kCellRange - 4) fault[i] = 2;
+        p[a] += kShift[a];
+      }
+      cut.P[i] = p;
+    }
+  });
+  for (std::size_t i = 0; i < nv; ++i) {
+    if (fault[i] == 1) TT_THROW(InvalidInput, "constrain topology: vertex " << i << " has a non-finite coordinate");
+    if (fault[i] == 2)
+      TT_THROW(InvalidInput, "constrain topology: vertex " << i << " lies beyond " << (kCellRange - 4)
+                                                           << " voxels from the grid origin");
+  }
+  constexpr std::size_t kChunk = 2048;
+  const std::size_t n_chunks = (nf + kChunk - 1) / kChunk;
+  std::vector<Chunk> chunks(n_chunks);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n_chunks), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t c = r.begin(); c != r.end(); ++c) {
+      Chunk& out = chunks[c];
+      const std::size_t end = std::min(nf, (c + 1) * kChunk);
+      out.pieces.reserve(3 * (end - c * kChunk));
+      out.keys.reserve(12 * (end - c * kChunk));
+      out.tags.reserve(12 * (end - c * kChunk));
+      for (std::size_t f = c * kChunk; f < end; ++f) {
+        if (mesh.is_deleted(Face(Index(f)))) out.face_count.push_back(0);
+        else clip_face(mesh, cut.P, Index(f), out);
+      }
+    }
+  });
+  std::size_t n_pieces = 0, n_keys = 0;
+  for (const Chunk& c : chunks) n_pieces += c.pieces.size(), n_keys += c.keys.size();
+  cut.pieces.reserve(n_pieces);
+  cut.keys.reserve(n_keys);
+  cut.tags.reserve(n_keys);
+  cut.face_pieces.reserve(nf + 1);
+  cut.face_pieces.push_back(0);
+  for (Chunk& c : chunks) {
+    const auto key_offset = std::uint32_t(cut.keys.size());
+    for (Piece p : c.pieces) {
+      p.begin += key_offset;
+      cut.pieces.push_back(p);
+    }
+    cut.keys.insert(cut.keys.end(), c.keys.begin(), c.keys.end());
+    cut.tags.insert(cut.tags.end(), c.tags.begin(), c.tags.end());
+    for (std::uint32_t n : c.face_count) cut.face_pieces.push_back(cut.face_pieces.back() + n);
+    cut.bad_faces.insert(cut.bad_faces.end(), c.bad_faces.begin(), c.bad_faces.end());
+    cut.bad_boxes.insert(cut.bad_boxes.end(), c.bad_boxes.begin(), c.bad_boxes.end());
+    c = Chunk();  // free as we go
+  }
+  return cut;
+}
+
+}  // namespace topotrack::topology

@@ -1,0 +1,179 @@
+// Algorithm 1 end to end on small generated sequences: coherence (ids follow the surface), topology
+// following the input, determinism across thread counts, and bit-identical resume from a checkpoint.
+#include <gtest/gtest.h>
+#include <tbb/global_control.h>
+
+#include <filesystem>
+#include <unordered_map>
+
+#include "engine/checkpoint.hpp"
+#include "engine/tracker.hpp"
+#include "io/error.hpp"
+#include "io/event_file.hpp"
+#include "kernels/mesh/mesh_convert.hpp"
+#include "kernels/mesh/mesh_queries.hpp"
+#include "kernels/sdf/marching_cubes.hpp"
+#include "kernels/sdf/signed_distance.hpp"
+#include "tests/support/test_meshes.hpp"
+
+namespace topotrack {
+namespace {
+
+constexpr double kVoxel = 0.05;
+
+//! An incoherent input frame: the marching-cubes surface of the union of spheres (centre, radius), so the
+//! connectivity differs from frame to frame as it does for simulation output.
+SurfaceMesh spheres_frame(const std::vector<std::pair<Vec3, double>>& spheres) {
+  test::Soup all;
+  for (const auto& [c, r] : spheres) all = test::merge(all, test::icosphere(4, r, c));
+  const auto grid = signed_distance(all.positions, all.triangles, kVoxel, 3.0);
+  return to_surface_mesh(marching_cubes(*grid));
+}
+
+//! A peanut (two overlapping spheres of different size) translated by `t`.
+SurfaceMesh peanut(const Vec3& t) { return spheres_frame({{Vec3(-0.25, 0, 0) + t, 0.5}, {Vec3(0.35, 0.1, 0) + t, 0.35}}); }
+
+struct TrackRun {
+  std::vector<std::string> meshes;  // encoded tracked meshes per frame (positions, ids, triangles)
+  std::vector<std::string> events;  // encoded event lists per frame
+};
+
+std::string encode_mesh(const SurfaceMesh& m) {
+  const MeshData d = to_mesh_data(m, false);
+  std::string s;
+  for (const auto& p : d.positions) s.append(reinterpret_cast<const char*>(p.data()), sizeof(p));
+  for (const auto& t : d.triangles) s.append(reinterpret_cast<const char*>(t.data()), sizeof(t));
+  for (auto id : *d.ids) s.append(reinterpret_cast<const char*>(&id), sizeof(id));
+  return s;
+}
+
+TrackRun track(const std::vector<SurfaceMesh>& frames, std::size_t first = 0, Tracker* tracker_in = nullptr) {
+  Tracker own;
+  Tracker& tracker = tracker_in ? *tracker_in : own;
+  TrackRun run;
+  for (std::size_t i = first; i < frames.size(); ++i) {
+    tracker.add_frame(frames[i]);
+    run.meshes.push_back(encode_mesh(tracker.mesh()));
+    run.events.push_back(encode_events(tracker.events()));
+  }
+  return run;
+}
+
+std::vector<SurfaceMesh> translating_peanut(int n, const Vec3& step) {
+  std::vector<SurfaceMesh> frames;
+  for (int i = 0; i < n; ++i) frames.push_back(peanut(double(i) * step));
+  return frames;
+}
+
+TEST(Tracker, FollowsATranslationCoherently) {
+  const Vec3 step(0.04, 0.01, 0);
+  const auto frames = translating_peanut(4, step);
+  Tracker tracker;
+  tracker.add_frame(frames[0]);
+  std::unordered_map<VertexId, Vec3> start;
+  for (Index i = 0; i < tracker.mesh().vertices_size(); ++i) start[tracker.mesh().id(Vertex(i))] = tracker.mesh().position(Vertex(i));
+  EXPECT_TRUE(tracker.events().empty());
+  for (std::size_t f = 1; f < frames.size(); ++f) {
+    const FrameReport& r = tracker.add_frame(frames[f]);
+    std::printf("frame %zu: V %zu split %zu sub %zu col %zu pc %zu pd %zu cells %zu/%zu  coarse %.3f fine %.3f imp %.3f sdf %.3f topo %.3f\n", f, r.vertices, r.events_by_kind[0], r.events_by_kind[1], r.events_by_kind[2], r.events_by_kind[3], r.events_by_kind[4], r.complex_cells_self, r.complex_cells_target, r.seconds.coarse, r.seconds.fine, r.seconds.improve, r.seconds.signed_distance, r.seconds.topology);
+    EXPECT_EQ(r.components, 1u);
+    EXPECT_EQ(r.euler, 2);
+    EXPECT_NO_THROW(tracker.mesh().validate(true));
+  }
+  // Points that were never resampled moved with the translation: ids follow the surface.
+  const Vec3 total = 3.0 * step;
+  std::size_t kept = 0;
+  double err = 0;
+  for (Index i = 0; i < tracker.mesh().vertices_size(); ++i) {
+    auto it = start.find(tracker.mesh().id(Vertex(i)));
+    if (it == start.end()) continue;
+    ++kept;
+    err += (tracker.mesh().position(Vertex(i)) - (it->second + total)).norm();
+  }
+  ASSERT_GT(kept, start.size() * 8 / 10) << "most vertices survive a rigid translation";
+  const double diag = bounding_box(tracker.mesh()).diagonal();
+  EXPECT_LT(err / double(kept), 0.01 * diag) << "mean drift against the true translation";
+  // Velocities are the per-frame motion.
+  Vec3 mean_v = Vec3::Zero();
+  for (const Vec3& v : tracker.velocities()) mean_v += v;
+  mean_v /= double(tracker.velocities().size());
+  EXPECT_LT((mean_v - step).norm(), 0.2 * step.norm());
+}
+
+TEST(Tracker, TakesTheTopologyOfTheInput) {
+  // A peanut whose neck pinches off: the tracked mesh must split into two components and stay closed.
+  std::vector<SurfaceMesh> frames;
+  for (int i = 0; i < 5; ++i) {
+    const double gap = 0.1 * i;
+    frames.push_back(spheres_frame({{Vec3(-0.4 - gap, 0, 0), 0.45}, {Vec3(0.4 + gap, 0, 0), 0.45}}));
+  }
+  Tracker tracker;
+  std::size_t last_components = 0;
+  for (const auto& f : frames) {
+    const std::size_t want = connected_components(f);
+    last_components = tracker.add_frame(f).components;
+    EXPECT_EQ(last_components, want);
+    EXPECT_EQ(tracker.report().euler, euler_characteristic(f));
+    EXPECT_NO_THROW(tracker.mesh().validate(true));
+  }
+  EXPECT_EQ(last_components, 2u);
+}
+
+TEST(Tracker, SameOutputWithOneOrTwoThreads) {
+  const auto frames = translating_peanut(3, Vec3(0.05, 0, 0.02));
+  TrackRun one, two;
+  {
+    tbb::global_control c(tbb::global_control::max_allowed_parallelism, 1);
+    one = track(frames);
+  }
+  {
+    tbb::global_control c(tbb::global_control::max_allowed_parallelism, 2);
+    two = track(frames);
+  }
+  ASSERT_EQ(one.meshes.size(), two.meshes.size());
+  for (std::size_t i = 0; i < one.meshes.size(); ++i) {
+    EXPECT_EQ(one.meshes[i], two.meshes[i]) << "frame " << i;
+    EXPECT_EQ(one.events[i], two.events[i]) << "frame " << i;
+  }
+}
+
+TEST(Tracker, ResumeFromCheckpointIsBitIdentical) {
+  const auto frames = translating_peanut(4, Vec3(0.05, -0.02, 0.01));
+  const TrackRun straight = track(frames);
+  // Interrupted after frame 2: write a checkpoint, read it back into a fresh tracker, continue.
+  Tracker first;
+  first.add_frame(frames[0]);
+  first.add_frame(frames[1]);
+  const auto path = std::filesystem::temp_directory_path() / "topotrack_tracker_test.checkpoint";
+  write_checkpoint(path, {2, 1, first.edge_length(), first.voxel_size(), first.mesh().clone()});
+  Checkpoint c = read_checkpoint(path);
+  std::filesystem::remove(path);
+  Tracker resumed;
+  resumed.restore(std::move(c.mesh), 2, c.target_edge_length, c.voxel_size);
+  const TrackRun rest = track(frames, 2, &resumed);
+  ASSERT_EQ(rest.meshes.size(), 2u);
+  EXPECT_EQ(rest.meshes[0], straight.meshes[2]);
+  EXPECT_EQ(rest.events[0], straight.events[2]);
+  EXPECT_EQ(rest.meshes[1], straight.meshes[3]);
+  EXPECT_EQ(rest.events[1], straight.events[3]);
+}
+
+TEST(Tracker, AcceptsLevelSetFrames) {
+  test::Soup s = test::icosphere(4, 0.5);
+  Tracker tracker;
+  for (int i = 0; i < 2; ++i) {
+    for (auto& p : s.positions) p.x() += 0.03;
+    const auto grid = signed_distance(s.positions, s.triangles, kVoxel, 3.0);
+    tracker.add_frame(*grid, "sphere.vdb");
+    EXPECT_NO_THROW(tracker.mesh().validate(true));
+  }
+  EXPECT_EQ(tracker.report().components, 1u);
+}
+
+TEST(Tracker, RejectsOpenInput) {
+  Tracker tracker;
+  EXPECT_THROW(tracker.add_frame(test::open_box().mesh(), "box.ply"), InvalidInput);
+}
+
+}  // namespace
+}  // namespace topotrack

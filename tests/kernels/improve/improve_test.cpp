@@ -1,0 +1,297 @@
+#include "kernels/improve/improve.hpp"
+
+#include <gtest/gtest.h>
+#include <tbb/global_control.h>
+
+#include <cstdio>
+#include <random>
+#include <string>
+
+#include "kernels/mesh/mesh_convert.hpp"
+#include "kernels/mesh/mesh_queries.hpp"
+#include "kernels/propagate/propagate.hpp"
+#include "tests/kernels/improve/implicit_mesh.hpp"
+#include "tests/kernels/improve/improve_targets.hpp"
+#include "tests/kernels/improve/surface_distance.hpp"
+#include "tests/support/test_meshes.hpp"
+
+namespace topotrack {
+namespace {
+
+struct Case {
+  std::string name;
+  test::Soup soup;
+};
+
+test::Soup scaled(test::Soup s, const Vec3& scale) {
+  for (auto& p : s.positions) p = p.cwiseProduct(scale);
+  return s;
+}
+
+//! An icosphere whose vertices slide randomly along the sphere: random edge lengths, same surface.
+test::Soup slid_sphere(int subdivisions, double amplitude, unsigned seed) {
+  test::Soup s = test::icosphere(subdivisions);
+  test::jitter(s, amplitude, seed);
+  for (auto& p : s.positions) p.normalize();
+  return s;
+}
+
+//! Coarse meshes of every kind, from many seeds: improve_mesh must keep every invariant on them.
+std::vector<Case> random_cases() {
+  std::vector<Case> c;
+  for (unsigned seed = 1; seed <= 6; ++seed) {
+    test::Soup s = test::icosphere(3);
+    test::jitter(s, 0.02 + 0.01 * seed, seed);
+    c.push_back({"jittered_icosphere_" + std::to_string(seed), std::move(s)});
+  }
+  for (unsigned seed = 1; seed <= 6; ++seed)
+    c.push_back({"slid_sphere_" + std::to_string(seed), slid_sphere(3, 0.03 + 0.01 * seed, seed)});
+  c.push_back({"anisotropic_sphere", scaled(test::icosphere(3), Vec3(2.5, 1.0, 0.4))});
+  c.push_back({"flat_sphere", scaled(test::icosphere(3), Vec3(1.0, 1.0, 0.15))});
+  c.push_back({"thin_torus", test::torus(90, 6, 1.0, 0.3)});
+  for (unsigned seed = 1; seed <= 3; ++seed) {
+    test::Soup s = test::torus(60, 20);
+    test::jitter(s, 0.01 * seed, seed + 10);
+    c.push_back({"jittered_torus_" + std::to_string(seed), std::move(s)});
+  }
+  c.push_back({"two_spheres", test::merge(slid_sphere(2, 0.05, 3), test::icosphere(3, 0.5, Vec3(3, 0, 0)))});
+  c.push_back({"mt_ellipsoid_coarse", test::mt_ellipsoid(16, Vec3(1.0, 0.7, 0.5))});
+  c.push_back({"mt_torus_coarse", test::mt_torus(20)});
+  return c;
+}
+
+TEST(Improve, MeetsTargetsOnMarchingTetrahedraMeshes) {
+  const std::vector<Case> cases = {{"mt_torus_50", test::mt_torus(50)},
+                                   {"mt_ellipsoid_40", test::mt_ellipsoid(40, Vec3(1.0, 0.7, 0.5))},
+                                   {"mt_thin_torus_60", test::mt_torus(60, 1.0, 0.2)}};
+  for (const Case& c : cases) {
+    const SurfaceMesh in = c.soup.mesh();
+    SurfaceMesh out = in.clone();
+    EventList events;
+    const ImproveReport rep = improve_mesh(out, {}, &events);
+    EXPECT_GT(rep.collapses, 0u);
+    EXPECT_EQ(events.size(), rep.splits + rep.collapses);
+    EXPECT_FALSE(out.has_garbage());
+    test::expect_targets(in, out, rep, c.name);
+  }
+}
+
+TEST(Improve, KeepsInvariantsAfterEveryOperationOnRandomMeshes) {
+  for (const Case& c : random_cases()) {
+    SCOPED_TRACE(c.name);
+    const SurfaceMesh in = c.soup.mesh();
+    SurfaceMesh out = in.clone();
+    ImproveParams params;
+    params.validate_each_step = true;  // SurfaceMesh::validate() after every split, collapse and flip
+    EventList events;
+    ImproveReport rep;
+    ASSERT_NO_THROW(rep = improve_mesh(out, params, &events));
+    std::printf("%s\n", test::describe(c.name, in, out, rep).c_str());
+    EXPECT_NO_THROW(out.validate());
+    EXPECT_EQ(genus(out), genus(in));
+    EXPECT_EQ(connected_components(out), connected_components(in));
+    const QualityStats q = quality_stats(out);
+    const QualityStats q0 = quality_stats(in);
+    // No fold is created, none survives; no triangle gets worse than the worst one before.
+    EXPECT_EQ(q.dihedral_below_45deg, 0u);
+    EXPECT_GE(q.min_angle_deg, std::min(q0.min_angle_deg, 2.0));
+    EXPECT_LE(q.edge_length.max, rep.max_edge_length * (1 + 1e-9));
+    // The surface moves by at most max_surface_deviation * L.
+    const double L = std::sqrt(rep.min_edge_length * rep.max_edge_length);
+    EXPECT_LE(test::hausdorff_distance(in, out, L), params.max_surface_deviation * L * (1 + 1e-9));
+    EXPECT_EQ(events.size(), rep.splits + rep.collapses);
+  }
+}
+
+TEST(Improve, RemovesFolds) {
+  // Push one vertex of a sphere through its ring: the faces around it fold over (dihedral angles near 0).
+  test::Soup s = test::icosphere(3);
+  const Vec3 v = s.positions[100];
+  Vec3 far = s.positions[0];
+  for (const auto& t : s.triangles)
+    for (int k = 0; k < 3; ++k)
+      if (t[k] == 100) far = s.positions[t[(k + 1) % 3]];
+  s.positions[100] = far + 0.8 * (far - v);
+  const SurfaceMesh in = s.mesh();
+  ASSERT_GT(quality_stats(in).dihedral_below_45deg, 0u);
+  SurfaceMesh out = in.clone();
+  ImproveParams params;
+  params.validate_each_step = true;
+  const ImproveReport rep = improve_mesh(out, params);
+  EXPECT_GT(rep.collapses, 0u);
+  EXPECT_EQ(quality_stats(out).dihedral_below_45deg, 0u);
+  EXPECT_EQ(genus(out), 0);
+}
+
+//! Positions by id, as the float field propagation works on.
+IdField position_field(const SurfaceMesh& m) {
+  IdField f;
+  f.width = 3;
+  for (Index i = 0; i < m.vertices_size(); ++i) {
+    const Vertex v(i);
+    if (m.is_deleted(v)) continue;
+    f.ids.push_back(m.id(v));
+    for (int c = 0; c < 3; ++c) f.values.push_back(float(m.position(v)[c]));
+  }
+  return f;
+}
+
+TEST(Improve, EventsReplayForwardReproducesPositions) {
+  // Every vertex improve_mesh creates sits at the midpoint of the two it comes from (split: the edge's
+  // end points; collapse: the collapsed pair), exactly what the §4.4 rules say: positions are linear data,
+  // so propagating the input positions forward through the events must give the output positions.
+  for (const test::Soup& soup : {test::mt_torus(30), slid_sphere(3, 0.07, 5)}) {
+    const SurfaceMesh in = soup.mesh();
+    SurfaceMesh out = in.clone();
+    EventList events;
+    const ImproveReport rep = improve_mesh(out, {}, &events);
+    ASSERT_GT(rep.collapses, 0u);
+    const auto kinds = events.count_by_kind();
+    EXPECT_EQ(kinds[int(EventKind::EdgeSplit) - 1], rep.splits);
+    EXPECT_EQ(kinds[int(EventKind::EdgeCollapse) - 1], rep.collapses);
+    PropagateReport prep;
+    const IdField forward = propagate_forward(events, position_field(in), &prep);
+    EXPECT_EQ(prep.rules_with_missing_sources, 0u);
+    EXPECT_EQ(forward.ids.size(), out.n_vertices());
+    const double scale = bounding_box(in).diagonal();
+    std::vector<float> got;
+    const std::size_t missing = gather_values(forward, out.ids(), std::vector<float>{0.0f}, got);
+    EXPECT_EQ(missing, 0u);
+    double worst = 0;
+    for (Index i = 0; i < out.vertices_size(); ++i)
+      for (int c = 0; c < 3; ++c) worst = std::max(worst, std::abs(double(got[3 * i + c]) - out.position(Vertex(i))[c]));
+    EXPECT_LE(worst, 1e-6 * scale);
+  }
+}
+
+TEST(Improve, ForwardThenBackwardIsIdentityOnUntouchedVertices) {
+  const SurfaceMesh in = test::mt_torus(30).mesh();
+  SurfaceMesh out = in.clone();
+  EventList events;
+  improve_mesh(out, {}, &events);
+  const IdField before = position_field(in);
+  const IdField back = propagate_backward(events, propagate_forward(events, before));
+  // Every input vertex gets a value back (a collapsed one from the vertex it went into) ...
+  EXPECT_EQ(back.ids, before.ids);
+  // ... and one that no event touched gets exactly its own.
+  std::vector<std::uint8_t> survived(in.next_id(), 0);
+  for (const VertexId id : out.ids())
+    if (id < survived.size()) survived[id] = 1;
+  std::size_t untouched = 0;
+  for (std::size_t i = 0; i < before.ids.size(); ++i) {
+    if (!survived[before.ids[i]]) continue;
+    ++untouched;
+    for (int c = 0; c < 3; ++c) EXPECT_EQ(back.values[3 * i + c], before.values[3 * i + c]);
+  }
+  EXPECT_GT(untouched, before.ids.size() / 4);
+}
+
+TEST(Improve, InterpolatesVertexPropertiesLikeTheEvents) {
+  SurfaceMesh m = test::mt_torus(24).mesh();
+  auto prop = m.add_vertex_property<float>("x", 1);
+  for (Index i = 0; i < m.vertices_size(); ++i) prop(Vertex(i)) = float(m.position(Vertex(i)).x());
+  improve_mesh(m);
+  auto after = m.get_vertex_property<float>("x");
+  ASSERT_TRUE(after.is_valid());
+  for (Index i = 0; i < m.vertices_size(); ++i) EXPECT_NEAR(after(Vertex(i)), m.position(Vertex(i)).x(), 1e-5);
+}
+
+void expect_identical(const SurfaceMesh& a, const SurfaceMesh& b) {
+  ASSERT_EQ(a.vertices_size(), b.vertices_size());
+  EXPECT_EQ(a.ids(), b.ids());
+  EXPECT_EQ(a.next_id(), b.next_id());
+  for (Index i = 0; i < a.vertices_size(); ++i) ASSERT_EQ(a.position(Vertex(i)), b.position(Vertex(i)));
+  std::vector<Vec3> pa, pb;
+  std::vector<std::array<Index, 3>> ta, tb;
+  extract_triangles(a, pa, ta);
+  extract_triangles(b, pb, tb);
+  EXPECT_EQ(ta, tb);
+}
+
+TEST(Improve, OneAndTwoThreadsGiveBitIdenticalOutput) {
+  const SurfaceMesh in = test::mt_torus(40).mesh();
+  auto run = [&](int threads, EventList& events) {
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, std::size_t(threads));
+    SurfaceMesh m = in.clone();
+    improve_mesh(m, {}, &events);
+    return m;
+  };
+  EventList e1, e2;
+  const SurfaceMesh m1 = run(1, e1), m2 = run(2, e2);
+  expect_identical(m1, m2);
+  EXPECT_TRUE(e1 == e2);
+}
+
+TEST(Improve, AlreadyGoodMeshIsLeftUnchanged) {
+  // An improved mesh improved again with the same bounds, and a regular icosphere with default bounds.
+  SurfaceMesh good = test::mt_torus(30).mesh();
+  ImproveParams params;
+  params.target_edge_length = 0.06;
+  improve_mesh(good, params);
+  for (int round = 0; round < 2; ++round) {
+    SurfaceMesh again = good.clone();
+    EventList events;
+    const ImproveReport rep = improve_mesh(again, params, &events);
+    if (rep.splits + rep.collapses + rep.flips > 0) {  // a last fix-up is allowed once, then it is stable
+      good = std::move(again);
+      continue;
+    }
+    EXPECT_TRUE(events.empty());
+    expect_identical(again, good);
+    break;
+  }
+  {
+    SurfaceMesh again = good.clone();
+    EventList events;
+    const ImproveReport rep = improve_mesh(again, params, &events);
+    EXPECT_EQ(rep.splits + rep.collapses + rep.flips, 0u);
+    EXPECT_TRUE(events.empty());
+    expect_identical(again, good);
+  }
+  const SurfaceMesh sphere = test::icosphere(4).mesh();
+  SurfaceMesh copy = sphere.clone();
+  EventList events;
+  const ImproveReport rep = improve_mesh(copy, {}, &events);
+  EXPECT_EQ(rep.splits + rep.collapses + rep.flips, 0u);
+  EXPECT_TRUE(events.empty());
+  expect_identical(copy, sphere);
+}
+
+TEST(Improve, EmptyMeshAndZeroIterations) {
+  SurfaceMesh empty;
+  EXPECT_NO_THROW(improve_mesh(empty));
+  SurfaceMesh m = test::mt_torus(16).mesh();
+  const SurfaceMesh in = m.clone();
+  ImproveParams params;
+  params.max_iterations = 0;
+  EventList events;
+  improve_mesh(m, params, &events);
+  EXPECT_TRUE(events.empty());
+  expect_identical(m, in);
+}
+
+TEST(Improve, RejectsBadParameters) {
+  SurfaceMesh m = test::icosphere(1).mesh();
+  auto bad = [&](auto edit) {
+    ImproveParams p;
+    edit(p);
+    EXPECT_THROW(improve_mesh(m, p), InvalidInput);
+  };
+  bad([](ImproveParams& p) { p.ratio = 1; });
+  bad([](ImproveParams& p) { p.ratio = std::nan(""); });
+  bad([](ImproveParams& p) { p.min_angle_deg = 60; });
+  bad([](ImproveParams& p) { p.min_angle_deg = -1; });
+  bad([](ImproveParams& p) { p.min_dihedral_deg = 180; });
+  bad([](ImproveParams& p) { p.max_iterations = -1; });
+  bad([](ImproveParams& p) { p.max_surface_deviation = -0.1; });
+  bad([](ImproveParams& p) { p.max_flip_bend_deg = 181; });
+  bad([](ImproveParams& p) { p.target_edge_length = std::numeric_limits<double>::infinity(); });
+}
+
+TEST(Improve, MeanEdgeLengthParallelMatchesSerial) {
+  const SurfaceMesh m = test::mt_torus(30).mesh();
+  EXPECT_NEAR(mean_edge_length_parallel(m), mean_edge_length(m), 1e-12);
+}
+
+}  // namespace
+}  // namespace topotrack

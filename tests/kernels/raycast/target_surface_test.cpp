@@ -1,0 +1,115 @@
+// TargetSurface (Embree): undirected rays, closest points, batch queries, invalid input.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+
+#include "kernels/raycast/target_surface.hpp"
+#include "tests/support/test_meshes.hpp"
+
+namespace topotrack {
+namespace {
+
+TEST(TargetSurface, UndirectedRayTakesTheNearerSide) {
+  const test::Soup s = test::icosphere(5);
+  const TargetSurface t(s.positions, s.triangles);
+  EXPECT_EQ(t.n_triangles(), s.triangles.size());
+  EXPECT_NEAR(t.bbox_diagonal(), 2 * std::sqrt(3.0), 1e-2);
+  // From (0, 0.8, 0) along +y: the wall at y = 1 is 0.2 away; the one at y = -1 is 1.8 away.
+  TargetSurface::Hit h = t.cast_undirected(Vec3(0, 0.8, 0), Vec3(0, -3, 0), 10);
+  ASSERT_TRUE(h.hit);
+  EXPECT_NEAR(h.distance, 0.2, 2e-3);
+  EXPECT_NEAR(h.point.y(), 1.0, 2e-3);
+  EXPECT_GT(h.normal.y(), 0.99);
+  EXPECT_LT(h.face, t.n_triangles());
+  // Directed cast along -y goes to the far wall.
+  h = t.cast(Vec3(0, 0.8, 0), Vec3(0, -1, 0), 10);
+  ASSERT_TRUE(h.hit);
+  EXPECT_NEAR(h.distance, 1.8, 2e-3);
+  // Length limit, misses and degenerate directions.
+  EXPECT_FALSE(t.cast_undirected(Vec3(0, 0.8, 0), Vec3(0, 1, 0), 0.1).hit);
+  EXPECT_FALSE(t.cast_undirected(Vec3(5, 5, 5), Vec3(1, 0, 0), 100).hit);
+  EXPECT_FALSE(t.cast_undirected(Vec3(0, 0, 0), Vec3::Zero(), 100).hit);
+  EXPECT_FALSE(t.cast_undirected(Vec3(0, std::nan(""), 0), Vec3(1, 0, 0), 100).hit);
+}
+
+TEST(TargetSurface, HitDistanceIsRefinedInDouble) {
+  // A single large triangle in the plane z = 1e-3 far from the origin: float rounding of the origin
+  // alone would be ~1e-4.
+  const std::vector<Vec3> p = {Vec3(1000, 1000, 1e-3), Vec3(1002, 1000, 1e-3), Vec3(1000, 1002, 1e-3)};
+  const std::vector<std::array<Index, 3>> f = {{0, 1, 2}};
+  const TargetSurface t(p, f);
+  const TargetSurface::Hit h = t.cast_undirected(Vec3(1000.3, 1000.3, 0.5), Vec3(0, 0, 1), 10);
+  ASSERT_TRUE(h.hit);
+  EXPECT_NEAR(h.distance, 0.5 - 1e-3, 1e-9);
+  EXPECT_NEAR(h.point.z(), 1e-3, 1e-9);
+}
+
+TEST(TargetSurface, ClosestPoint) {
+  const test::Soup s = test::icosphere(5);
+  const TargetSurface t(s.positions, s.triangles);
+  for (const Vec3& q : {Vec3(0, 0, 3), Vec3(0.1, 0.2, 0.3), Vec3(-2, 1, 0.5)}) {
+    const TargetSurface::Hit h = t.closest_point(q);
+    ASSERT_TRUE(h.hit);
+    EXPECT_NEAR(h.distance, std::abs(q.norm() - 1.0), 2e-3);
+    EXPECT_NEAR((h.point - q).norm(), h.distance, 1e-12);
+    // Brute force agrees.
+    double best = std::numeric_limits<double>::infinity();
+    for (const auto& tri : s.triangles)
+      best = std::min(best, (closest_point_on_triangle(q, s.positions[tri[0]], s.positions[tri[1]],
+                                                       s.positions[tri[2]]) - q).norm());
+    EXPECT_DOUBLE_EQ(h.distance, best);
+  }
+  EXPECT_FALSE(t.closest_point(Vec3(0, 0, 3), 1.5).hit);
+  EXPECT_TRUE(t.closest_point(Vec3(0, 0, 3), 2.1).hit);
+}
+
+TEST(TargetSurface, ClosestPointOnTriangleRegions) {
+  const Vec3 a(0, 0, 0), b(1, 0, 0), c(0, 1, 0);
+  EXPECT_EQ(closest_point_on_triangle(Vec3(-1, -1, 0), a, b, c), a);
+  EXPECT_EQ(closest_point_on_triangle(Vec3(2, -1, 0), a, b, c), b);
+  EXPECT_EQ(closest_point_on_triangle(Vec3(-1, 2, 0), a, b, c), c);
+  EXPECT_TRUE(closest_point_on_triangle(Vec3(0.5, -1, 3), a, b, c).isApprox(Vec3(0.5, 0, 0)));
+  EXPECT_TRUE(closest_point_on_triangle(Vec3(1, 1, 0), a, b, c).isApprox(Vec3(0.5, 0.5, 0)));
+  EXPECT_TRUE(closest_point_on_triangle(Vec3(0.2, 0.3, -2), a, b, c).isApprox(Vec3(0.2, 0.3, 0)));
+}
+
+TEST(TargetSurface, BatchQueriesMatchSingleOnes) {
+  const test::Soup s = test::torus(64, 32);
+  const TargetSurface t = TargetSurface::from_mesh(s.mesh());
+  std::vector<Vec3> o, d;
+  for (int i = 0; i < 2000; ++i) {
+    const double a = 0.01 * i;
+    o.push_back(Vec3(1.5 * std::cos(a), 1.5 * std::sin(a), 0.3 * std::sin(3 * a)));
+    d.push_back(Vec3(std::cos(a), std::sin(a), 0.1));
+  }
+  const auto hits = t.cast_undirected(o, d, 5.0);
+  const auto closest = t.closest_points(o);
+  for (std::size_t i = 0; i < o.size(); ++i) {
+    const auto h = t.cast_undirected(o[i], d[i], 5.0);
+    EXPECT_EQ(h.hit, hits[i].hit);
+    EXPECT_EQ(h.face, hits[i].face);
+    EXPECT_EQ(h.distance, hits[i].distance);
+    EXPECT_EQ(t.closest_point(o[i]).point, closest[i].point);
+    if (h.hit) {
+      EXPECT_GE(h.distance, closest[i].distance - 1e-9);
+    }
+  }
+  EXPECT_THROW(t.cast_undirected(o, std::span<const Vec3>(d).first(3), 1.0), InvalidInput);
+}
+
+TEST(TargetSurface, InvalidInputThrows) {
+  const std::vector<Vec3> p = {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0)};
+  const std::vector<std::array<Index, 3>> bad = {{0, 1, 5}};
+  EXPECT_THROW(TargetSurface(p, bad), InvalidInput);
+  EXPECT_THROW(TargetSurface(p, {}), InvalidInput);
+  std::vector<Vec3> nan = p;
+  nan[1].x() = std::nan("");
+  const std::vector<std::array<Index, 3>> ok = {{0, 1, 2}};
+  EXPECT_THROW(TargetSurface(nan, ok), InvalidInput);
+  SurfaceMesh empty;
+  EXPECT_THROW(TargetSurface::from_mesh(empty), InvalidInput);
+}
+
+}  // namespace
+}  // namespace topotrack

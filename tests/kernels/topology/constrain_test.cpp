@@ -1,0 +1,286 @@
+// Tests of ConstrainTopology (§4.3) and its events (§4.4).
+#include "kernels/topology/constrain.hpp"
+
+#include <gtest/gtest.h>
+#include <openvdb/tools/Composite.h>
+#include <openvdb/tools/LevelSetSphere.h>
+#include <tbb/global_control.h>
+
+#include <filesystem>
+
+#include "io/mesh_reader.hpp"
+#include "kernels/gen/synthetic.hpp"
+#include "kernels/mesh/mesh_convert.hpp"
+#include "kernels/mesh/mesh_queries.hpp"
+#include "kernels/propagate/propagate.hpp"
+#include "kernels/sdf/marching_cubes.hpp"
+#include "kernels/sdf/signed_distance.hpp"
+#include "tests/kernels/topology/self_intersection.hpp"
+#include "tests/support/test_meshes.hpp"
+
+namespace topotrack {
+namespace {
+
+using GridPtr = openvdb::FloatGrid::Ptr;
+
+GridPtr sphere(double r, const Vec3& c, double h) {
+  ensure_openvdb_initialized();
+  return openvdb::tools::createLevelSetSphere<openvdb::FloatGrid>(float(r), openvdb::Vec3f(float(c.x()), float(c.y()), float(c.z())),
+                                                                  float(h), 3.0f);
+}
+GridPtr unite(GridPtr a, GridPtr b) {
+  openvdb::tools::csgUnion(*a, *b);
+  return a;
+}
+SurfaceMesh mc_mesh(const openvdb::FloatGrid& g) { return to_surface_mesh(marching_cubes(g)); }
+
+struct Topo {
+  long components, euler;
+};
+Topo topo(const SurfaceMesh& m) { return {long(connected_components(m)), euler_characteristic(m)}; }
+
+// Closed 2-manifold, consistent, free of self-intersections.
+void expect_sound(const SurfaceMesh& m) {
+  EXPECT_NO_THROW(m.validate(true));
+  EXPECT_EQ(boundary_edge_count(m), 0u);
+  std::vector<std::pair<std::array<Index, 3>, std::array<Index, 3>>> pairs;
+  EXPECT_EQ(test::count_self_intersections(m, &pairs), 0u);
+  for (std::size_t i = 0; i < std::min<std::size_t>(pairs.size(), 4); ++i) {
+    std::ostringstream os;
+    for (const auto& t : {pairs[i].first, pairs[i].second}) {
+      for (Index v : t) os << v << " (" << m.position(Vertex(v)).transpose() << ")  ";
+      os << " | ";
+    }
+    ADD_FAILURE() << "intersecting: " << os.str() << " of " << m.n_vertices();
+  }
+}
+
+// After constraining to Θ, M has Θ's topology (that of its marching-cubes surface).
+void expect_topology_of(const SurfaceMesh& m, const openvdb::FloatGrid& theta) {
+  const SurfaceMesh target = mc_mesh(theta);
+  EXPECT_EQ(topo(m).components, topo(target).components);
+  EXPECT_EQ(topo(m).euler, topo(target).euler);
+}
+
+TEST(ConstrainTopology, MatchingMeshIsLeftUnchanged) {
+  const double h = 0.05;
+  GridPtr theta = unite(sphere(0.5, {-0.3, 0, 0}, h), sphere(0.4, {0.35, 0.1, 0}, h));
+  SurfaceMesh m = mc_mesh(*theta);
+  const std::vector<Vec3> before = m.positions();
+  const std::vector<VertexId> ids = m.ids();
+  EventList ev;
+  const ConstrainReport r = constrain_topology(m, *theta, {}, &ev);
+  EXPECT_EQ(r.complex_cells, 0u);
+  EXPECT_TRUE(ev.empty());
+  EXPECT_EQ(m.positions(), before);
+  EXPECT_EQ(m.ids(), ids);
+}
+
+TEST(ConstrainTopology, SphereSplitsIntoTwo) {
+  const double h = 0.04;
+  // M: two overlapping balls, one component; target: the same balls pulled apart.
+  SurfaceMesh m = mc_mesh(*unite(sphere(0.5, {-0.42, 0, 0}, h), sphere(0.5, {0.42, 0, 0}, h)));
+  ASSERT_EQ(connected_components(m), 1u);
+  GridPtr theta = unite(sphere(0.5, {-0.56, 0.01, 0}, h), sphere(0.5, {0.56, 0.01, 0}, h));
+  const std::size_t nv = m.n_vertices();
+  EventList ev;
+  const ConstrainReport r = constrain_topology(m, *theta, {}, &ev);
+  expect_sound(m);
+  EXPECT_EQ(connected_components(m), 2u);
+  EXPECT_EQ(r.components_before, 1);
+  EXPECT_EQ(r.components_after, 2);
+  expect_topology_of(m, *theta);
+  EXPECT_GT(r.complex_cells, 0u);
+  EXPECT_LT(r.vertices_removed, nv);  // a local change, not a re-meshing
+  EXPECT_GT(r.patches_created, 0u);
+  EXPECT_GT(r.patches_deleted, 0u);
+  EXPECT_FALSE(ev.empty());
+}
+
+TEST(ConstrainTopology, UnitSphereToTwoSeparateSpheres) {
+  SurfaceMesh m = test::icosphere(4).mesh();
+  GridPtr theta = unite(sphere(0.45, {-0.55, 0, 0}, 0.05), sphere(0.45, {0.55, 0, 0}, 0.05));
+  constrain_topology(m, *theta);
+  expect_sound(m);
+  EXPECT_EQ(connected_components(m), 2u);
+  EXPECT_EQ(euler_characteristic(m), 4);
+}
+
+TEST(ConstrainTopology, InterpenetratingSpheresMerge) {
+  // ConstrainTopology(M, φ_M): the self-intersection of two overlapping spheres becomes a merge.
+  test::Soup s = test::merge(test::icosphere(4, 0.6, Vec3(-0.35, 0, 0)), test::icosphere(4, 0.6, Vec3(0.35, 0.02, 0.01)));
+  SurfaceMesh m = s.mesh();
+  ASSERT_GT(test::count_self_intersections(m), 0u);
+  const GridPtr phi = signed_distance(m, 0.04);
+  EventList ev;
+  const ConstrainReport r = constrain_topology(m, *phi, {}, &ev);
+  expect_sound(m);
+  EXPECT_EQ(connected_components(m), 1u);
+  EXPECT_EQ(euler_characteristic(m), 2);
+  EXPECT_EQ(r.components_before, 2);
+  EXPECT_GT(r.vertices_removed, 0u);
+}
+
+TEST(ConstrainTopology, TorusAndSphereExchangeGenus) {
+  const double h = 0.04;
+  test::Soup t = test::torus(96, 48, 1.0, 0.4);
+  const SurfaceMesh torus_mesh = t.mesh();
+  const GridPtr torus = signed_distance(torus_mesh, h);
+  GridPtr filled = signed_distance(torus_mesh, h);
+  filled = unite(filled, sphere(0.75, Vec3::Zero(), h));
+  {
+    SurfaceMesh m = t.mesh();  // torus -> filled torus: genus 1 -> 0
+    ASSERT_EQ(genus(m), 1);
+    constrain_topology(m, *filled);
+    expect_sound(m);
+    EXPECT_EQ(genus(m), 0);
+    EXPECT_EQ(connected_components(m), 1u);
+  }
+  {
+    SurfaceMesh m = mc_mesh(*filled);  // filled torus -> torus: genus 0 -> 1
+    ASSERT_EQ(genus(m), 0);
+    constrain_topology(m, *torus);
+    expect_sound(m);
+    EXPECT_EQ(genus(m), 1);
+    EXPECT_EQ(connected_components(m), 1u);
+  }
+}
+
+TEST(ConstrainTopology, ComponentsAppearAndVanish) {
+  const double h = 0.05;
+  SurfaceMesh m = mc_mesh(*unite(sphere(0.5, {0, 0, 0}, h), sphere(0.2, {1.2, 0, 0}, h)));
+  ASSERT_EQ(connected_components(m), 2u);
+  GridPtr theta = unite(sphere(0.5, {0, 0, 0}, h), sphere(0.25, {0, 1.3, 0}, h));
+  EventList ev;
+  const ConstrainReport r = constrain_topology(m, *theta, {}, &ev);
+  expect_sound(m);
+  expect_topology_of(m, *theta);
+  EXPECT_EQ(r.patches_created, 1u);  // the new ball, created from nothing
+  EXPECT_EQ(r.patches_deleted, 1u);  // the old ball
+  // A patch with no boundary has no rule: the propagated field is absent there.
+  const auto counts = ev.count_by_kind();
+  EXPECT_EQ(counts[int(EventKind::PatchCreate) - 1], 1u);
+  EXPECT_EQ(counts[int(EventKind::PatchDelete) - 1], 1u);
+  const auto c = ev.event(ev.size() - 1);
+  EXPECT_TRUE(c.in.empty());
+  EXPECT_EQ(c.forward_begin, c.forward_end);
+}
+
+TEST(ConstrainTopology, EventsPropagateAffineFieldsExactlyAtCutsAndConstantsEverywhere) {
+  const double h = 0.04;
+  SurfaceMesh m = mc_mesh(*unite(sphere(0.5, {-0.42, 0, 0}, h), sphere(0.5, {0.42, 0, 0}, h)));
+  GridPtr theta = unite(sphere(0.5, {-0.56, 0.01, 0}, h), sphere(0.5, {0.56, 0.01, 0}, h));
+  // Field before: (1, x) per vertex; also stored as a property to check the carried values.
+  IdField before;
+  before.width = 2;
+  auto prop = m.add_vertex_property<float>("field", 2);
+  for (Index v = 0; v < m.vertices_size(); ++v) {
+    before.ids.push_back(m.id(Vertex(v)));
+    before.values.push_back(1.f);
+    before.values.push_back(float(m.position(Vertex(v)).x()));
+    prop(Vertex(v), 0) = 1.f;
+    prop(Vertex(v), 1) = float(m.position(Vertex(v)).x());
+  }
+  EventList ev;
+  const ConstrainReport r = constrain_topology(m, *theta, {}, &ev);
+  PropagateReport pr;
+  const IdField after = propagate_forward(ev, before, &pr);
+  EXPECT_EQ(pr.targets_missing, 0u);
+  ASSERT_EQ(after.ids.size(), m.n_vertices());
+  auto carried = m.get_vertex_property<float>("field");
+  ASSERT_TRUE(carried.is_valid());
+  for (std::size_t i = 0; i < after.ids.size(); ++i) EXPECT_NEAR(after.values[2 * i], 1.0, 1e-5);
+  // Every vertex of the result has a value; the carried property equals the propagated one.
+  std::unordered_map<VertexId, std::size_t> row;
+  for (std::size_t i = 0; i < after.ids.size(); ++i) row[after.ids[i]] = i;
+  std::size_t exact = 0;
+  for (Index v = 0; v < m.vertices_size(); ++v) {
+    const std::size_t i = row.at(m.id(Vertex(v)));
+    EXPECT_NEAR(carried(Vertex(v), 0), after.values[2 * i], 1e-5);
+    EXPECT_NEAR(carried(Vertex(v), 1), after.values[2 * i + 1], 1e-5);
+    exact += std::abs(after.values[2 * i + 1] - m.position(Vertex(v)).x()) < 1e-4;
+  }
+  // Kept vertices and the cut points (linear interpolation) reproduce x exactly.
+  EXPECT_GE(exact, m.n_vertices() - r.vertices_added + (r.vertices_added > 0 ? 1 : 0));
+  // Backward: the removed vertices get values from the kept ones around them.
+  const IdField back = propagate_backward(ev, after, &pr);
+  EXPECT_EQ(pr.targets_missing, 0u);
+  EXPECT_EQ(back.ids.size(), before.ids.size());
+}
+
+TEST(ConstrainTopology, IdenticalWithOneThreadOrMany) {
+  const double h = 0.04;
+  auto run = [&](int threads) {
+    tbb::global_control gc(tbb::global_control::max_allowed_parallelism, threads);
+    test::Soup s = test::merge(test::icosphere(4, 0.6, Vec3(-0.35, 0, 0)), test::icosphere(4, 0.6, Vec3(0.35, 0.02, 0.01)));
+    SurfaceMesh m = s.mesh();
+    const GridPtr phi = signed_distance(m, h);
+    EventList ev;
+    constrain_topology(m, *phi, {}, &ev);
+    std::vector<Vec3> P;
+    std::vector<std::array<Index, 3>> T;
+    extract_triangles(m, P, T);
+    return std::tuple(P, T, m.ids(), ev);
+  };
+  EXPECT_TRUE(run(1) == run(4));
+}
+
+TEST(ConstrainTopology, ThrowsOnBadInput) {
+  SurfaceMesh m = test::icosphere(2).mesh();
+  GridPtr theta = sphere(0.5, Vec3::Zero(), 0.05);
+  m.position(Vertex(3)) = Vec3(std::nan(""), 0, 0);
+  EXPECT_THROW(constrain_topology(m, *theta), InvalidInput);
+  SurfaceMesh far = test::icosphere(2, 1.0, Vec3(1e6, 0, 0)).mesh();
+  EXPECT_THROW(constrain_topology(far, *theta), InvalidInput);
+  ConstrainParams p;
+  p.max_region_growth = -1;
+  SurfaceMesh ok = test::icosphere(2).mesh();
+  EXPECT_THROW(constrain_topology(ok, *theta, p), InvalidInput);
+}
+
+// Every frame of `gen morph` and `gen metaballs` constrained to the next frame takes that frame's number of
+// components and Euler characteristic, and stays sound.
+void check_sequence(SyntheticKind kind, int frames) {
+  SyntheticParams sp;
+  sp.kind = kind;
+  sp.frames = frames;
+  const SyntheticScene scene(sp);
+  std::size_t changed = 0;
+  for (int n = 1; n < frames; ++n) {
+    SurfaceMesh m = to_surface_mesh(scene.frame_mesh(n));
+    const SurfaceMesh next = to_surface_mesh(scene.frame_mesh(n + 1));
+    const GridPtr phi = signed_distance(next, scene.voxel_size());
+    const ConstrainReport r = constrain_topology(m, *phi);
+    changed += r.complex_cells > 0;
+    SCOPED_TRACE(std::string(synthetic_kind_name(kind)) + " frame " + std::to_string(n));
+    EXPECT_NO_THROW(m.validate(true));
+    EXPECT_EQ(connected_components(m), connected_components(next));
+    EXPECT_EQ(euler_characteristic(m), euler_characteristic(next));
+    EXPECT_EQ(test::count_self_intersections(m), 0u);
+  }
+  EXPECT_GT(changed, 0u);
+}
+
+TEST(ConstrainTopology, MorphFramesTakeTheNextFramesTopology) { check_sequence(SyntheticKind::kMorph, 6); }
+TEST(ConstrainTopology, MetaballsFramesTakeTheNextFramesTopology) { check_sequence(SyntheticKind::kMetaballs, 6); }
+
+// Real data: a cow frame constrained to its own signed distance (the captured frames self-intersect:
+// those become merges) and then to a later frame's takes that frame's topology and is left sound.
+TEST(ConstrainTopology, RealSequenceFrames) {
+  const std::filesystem::path dir = std::filesystem::path(TOPOTRACK_SHARED_DIR) / "data" / "pcow";
+  if (!std::filesystem::exists(dir)) GTEST_SKIP() << "no " << dir;
+  SurfaceMesh m = to_surface_mesh(read_mesh(dir / "pcow.0001.ply"));
+  const SurfaceMesh target = to_surface_mesh(read_mesh(dir / "pcow.0040.ply"));
+  const double h = mean_edge_length(m);
+  EXPECT_GT(test::count_self_intersections(m), 0u) << "the input self-intersects";
+  const GridPtr phi_m = signed_distance(m, h);
+  constrain_topology(m, *phi_m);
+  expect_sound(m);
+  const GridPtr phi_s = signed_distance(target, h);
+  constrain_topology(m, *phi_s);
+  expect_sound(m);
+  expect_topology_of(m, *phi_s);
+}
+
+}  // namespace
+}  // namespace topotrack

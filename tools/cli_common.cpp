@@ -1,0 +1,53 @@
+#include "tools/cli_common.hpp"
+
+#include "io/error.hpp"
+#include "io/mesh_reader.hpp"
+#include "io/sequence.hpp"
+#include "kernels/mesh/mesh_convert.hpp"
+#include "kernels/mesh/mesh_queries.hpp"
+
+namespace topotrack::cli {
+namespace fs = std::filesystem;
+
+std::vector<InputFrame> resolve_inputs(const std::vector<std::string>& inputs, std::vector<std::string>* warnings) {
+  std::vector<InputFrame> frames;
+  for (const std::string& in : inputs) {
+    std::error_code ec;
+    if (fs::is_regular_file(in, ec)) {
+      frames.push_back({fs::path(in), -1});
+      continue;
+    }
+    const FrameSequence seq = find_frames(in);
+    for (const auto& f : seq.frames) frames.push_back({f.path, f.number});
+    if (warnings) warnings->insert(warnings->end(), seq.warnings.begin(), seq.warnings.end());
+  }
+  return frames;
+}
+
+MeshData load_mesh_data(const fs::path& path) { return read_mesh(path); }
+
+SurfaceMesh load_surface_mesh(const fs::path& path, bool require_closed) {
+  const MeshData data = read_mesh(path);
+  if (data.triangles.empty()) TT_THROW(InvalidInput, path.string() << ": no triangles");
+  SurfaceMesh mesh;
+  try {
+    mesh = to_surface_mesh(data);
+  } catch (const InvalidInput& e) {
+    TT_THROW(InvalidInput, path.string() << ": " << e.what());
+  }
+  if (require_closed) {
+    const std::size_t open = boundary_edge_count(mesh);
+    if (open)
+      TT_THROW(InvalidInput, path.string() << ": the surface is open (" << open
+                                           << " boundary edges); a closed surface is required");
+  }
+  return mesh;
+}
+
+void ensure_directory(const fs::path& dir) {
+  std::error_code ec;
+  fs::create_directories(dir, ec);
+  if (ec || !fs::is_directory(dir)) TT_THROW(IoError, dir.string() << ": cannot create folder: " << ec.message());
+}
+
+}  // namespace topotrack::cli

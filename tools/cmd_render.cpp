@@ -1,0 +1,225 @@
+// topotrack render FRAMES -o DIR: PNG pictures of frames with their colours (Embree ray tracer on the CPU),
+// camera fitted to the sequence's bounds; a contact sheet of several frames; a turntable of one frame.
+#include <chrono>
+#include <cstdio>
+#include <iostream>
+
+#include "io/error.hpp"
+#include "io/mesh_reader.hpp"
+#include "kernels/render/frame_geometry.hpp"
+#include "kernels/render/png.hpp"
+#include "kernels/render/raytracer.hpp"
+#include "tools/cli_common.hpp"
+#include "tools/commands.hpp"
+
+namespace topotrack::cli {
+namespace {
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+
+struct RenderOptions {
+  std::vector<std::string> inputs;
+  std::string out;
+  int width = 800, height = 800, samples = 2;
+  bool wireframe = false;
+  double wire_width = 1.0;
+  double azimuth = 30, elevation = 20, fov = 30, spin = 0;
+  std::string up = "y";
+  std::string color = "color";
+  std::string fit = "all";
+  int every = 1;
+  int sheet = 0, sheet_size = 256, sheet_columns = 0;
+  int turntable = 0;
+  long turntable_frame = -1;
+  bool no_frames = false;
+  std::vector<std::string> diff;
+  int diff_tolerance = 8;
+  bool quiet = false;
+};
+
+Vec3 parse_up(const std::string& s) {
+  if (s == "x") return Vec3::UnitX();
+  if (s == "y") return Vec3::UnitY();
+  if (s == "z") return Vec3::UnitZ();
+  if (s == "-y") return -Vec3::UnitY();
+  if (s == "-z") return -Vec3::UnitZ();
+  TT_THROW(UsageError, "--up must be x, y, z, -y or -z");
+}
+
+RenderMesh load_render_mesh(const fs::path& path, const std::string& color) {
+  const MeshData data = read_mesh(path);
+  try {
+    return to_render_mesh(data, color);
+  } catch (const InvalidInput& e) {
+    TT_THROW(InvalidInput, path.string() << ": " << e.what());
+  }
+}
+
+BoundingBox bounds_of(const RenderMesh& m) {
+  BoundingBox b;
+  for (const Vec3& p : m.positions) b.extend(p);
+  return b;
+}
+
+void run_diff(const RenderOptions& opt) {
+  const Image a = read_png(opt.diff[0]), b = read_png(opt.diff[1]);
+  const ImageDifference d = compare_images(a, b, opt.diff_tolerance);
+  std::printf("%s vs %s: mean |diff| %.3f, rms %.3f, max %d (of 255), %.2f%% pixels differ by more than %d\n",
+              opt.diff[0].c_str(), opt.diff[1].c_str(), d.mean_abs, d.rms, d.max_abs, 100 * d.share_differing,
+              opt.diff_tolerance);
+}
+
+void run_render(const RenderOptions& opt) {
+  if (!opt.diff.empty()) {
+    if (opt.diff.size() != 2) TT_THROW(UsageError, "--diff takes two PNG files");
+    run_diff(opt);
+    return;
+  }
+  if (opt.inputs.empty()) TT_THROW(UsageError, "FRAMES is required");
+  if (opt.out.empty()) TT_THROW(UsageError, "-o OUT is required");
+  if (opt.every < 1) TT_THROW(UsageError, "--every must be at least 1");
+  if (opt.fit != "all" && opt.fit != "each") TT_THROW(UsageError, "--fit must be all or each");
+  std::vector<std::string> warnings;
+  std::vector<InputFrame> frames = resolve_inputs(opt.inputs, &warnings);
+  for (const auto& w : warnings) std::cerr << "topotrack: warning: " << w << "\n";
+  {
+    std::vector<InputFrame> kept;
+    for (std::size_t k = 0; k < frames.size(); k += std::size_t(opt.every)) kept.push_back(frames[k]);
+    frames.swap(kept);
+  }
+  if (frames.empty()) TT_THROW(InvalidInput, "no frames");
+  const fs::path out(opt.out);
+  ensure_directory(out);
+
+  RenderParams params;
+  params.width = opt.width;
+  params.height = opt.height;
+  params.samples_per_axis = opt.samples;
+  params.wireframe = opt.wireframe;
+  params.wire_width_px = opt.wire_width;
+  CameraFit fit;
+  fit.azimuth_deg = opt.azimuth;
+  fit.elevation_deg = opt.elevation;
+  fit.fov_y_deg = opt.fov;
+  fit.up = parse_up(opt.up);
+  fit.aspect = double(opt.width) / std::max(1, opt.height);
+
+  // One camera for the whole sequence: fitted to the union of the frames' bounds.
+  BoundingBox all;
+  if (opt.fit == "all") {
+    for (const auto& f : frames) {
+      const BoundingBox b = bounds_of(load_render_mesh(f.path, opt.color));
+      if (!b.empty()) {
+        all.extend(b.min);
+        all.extend(b.max);
+      }
+    }
+    if (all.empty()) TT_THROW(InvalidInput, "the frames have no vertices");
+  }
+  auto camera_for = [&](std::size_t k, const RenderMesh& mesh, double aspect) {
+    CameraFit f = fit;
+    f.aspect = aspect;
+    if (frames.size() > 1) f.azimuth_deg += opt.spin * double(k) / double(frames.size() - 1);
+    return fit_camera(opt.fit == "all" ? all : bounds_of(mesh), f);
+  };
+
+  double render_seconds = 0;
+  std::size_t images = 0;
+  if (!opt.no_frames) {
+    for (std::size_t k = 0; k < frames.size(); ++k) {
+      RenderMesh mesh = load_render_mesh(frames[k].path, opt.color);
+      const Camera cam = camera_for(k, mesh, fit.aspect);
+      RenderReport rep;
+      const Image im = render(std::move(mesh), cam, params, &rep);
+      render_seconds += rep.build_seconds + rep.trace_seconds;
+      write_png(out / frames[k].path.filename().replace_extension(".png"), im);
+      ++images;
+      if (!opt.quiet) std::fprintf(stderr, "\rrender: %zu/%zu frames", k + 1, frames.size());
+    }
+    if (!opt.quiet) std::fprintf(stderr, "\n");
+  }
+
+  if (opt.sheet > 0) {
+    const std::size_t n = std::min<std::size_t>(std::size_t(opt.sheet), frames.size());
+    RenderParams tile = params;
+    tile.width = tile.height = opt.sheet_size;
+    std::vector<Image> tiles;
+    for (std::size_t i = 0; i < n; ++i) {
+      const std::size_t k = n == 1 ? 0 : i * (frames.size() - 1) / (n - 1);
+      RenderMesh mesh = load_render_mesh(frames[k].path, opt.color);
+      const Camera cam = camera_for(k, mesh, 1.0);
+      RenderReport rep;
+      tiles.push_back(render(std::move(mesh), cam, tile, &rep));
+      render_seconds += rep.build_seconds + rep.trace_seconds;
+      ++images;
+    }
+    ContactSheetParams sp;
+    sp.columns = opt.sheet_columns;
+    write_png(out / "contact_sheet.png", contact_sheet(tiles, sp));
+  }
+
+  if (opt.turntable > 0) {
+    std::size_t k = 0;
+    if (opt.turntable_frame >= 0) {
+      k = frames.size();
+      for (std::size_t i = 0; i < frames.size(); ++i)
+        if (frames[i].number == opt.turntable_frame) k = i;
+      if (k == frames.size()) TT_THROW(UsageError, "--turntable-frame " << opt.turntable_frame << ": no such frame");
+    }
+    RenderMesh mesh = load_render_mesh(frames[k].path, opt.color);
+    const Camera base = camera_for(k, mesh, fit.aspect);
+    const RenderScene scene(std::move(mesh));
+    for (int i = 0; i < opt.turntable; ++i) {
+      RenderReport rep;
+      const Image im = render(scene, orbit(base, fit.up, 360.0 * i / opt.turntable), params, &rep);
+      render_seconds += rep.trace_seconds;
+      char name[64];
+      std::snprintf(name, sizeof name, "turntable.%04d.png", i);
+      write_png(out / name, im);
+      ++images;
+    }
+  }
+  std::printf("rendered %zu images (%dx%d, %d samples per pixel) into %s: %.3f s rendering, %.3f s per image\n", images,
+              params.width, params.height, opt.samples * opt.samples, out.string().c_str(), render_seconds,
+              images ? render_seconds / images : 0.0);
+}
+
+void add_render_command(CLI::App& app) {
+  auto opt = std::make_shared<RenderOptions>();
+  CLI::App* sub = app.add_subcommand(
+      "render", "Ray-trace frames to PNG with their vertex colours (camera fitted to the sequence), a contact sheet "
+                "and a turntable; --diff A.png B.png compares two images");
+  sub->add_option("FRAMES", opt->inputs, "mesh files, folders, globs or frame patterns");
+  sub->add_option("-o,--output", opt->out, "output folder");
+  sub->add_option("--width", opt->width, "image width")->capture_default_str();
+  sub->add_option("--height", opt->height, "image height")->capture_default_str();
+  sub->add_option("--samples", opt->samples, "supersampling: N x N rays per pixel (1..8)")->capture_default_str();
+  sub->add_flag("--wireframe", opt->wireframe, "draw the triangle edges");
+  sub->add_option("--wire-width", opt->wire_width, "edge width in pixels")->capture_default_str();
+  sub->add_option("--azimuth", opt->azimuth, "camera azimuth about the up axis, degrees")->capture_default_str();
+  sub->add_option("--elevation", opt->elevation, "camera elevation, degrees")->capture_default_str();
+  sub->add_option("--fov", opt->fov, "vertical field of view, degrees")->capture_default_str();
+  sub->add_option("--up", opt->up, "up axis: x, y, z, -y, -z")->capture_default_str();
+  sub->add_option("--spin", opt->spin, "the camera turns by this many degrees from the first to the last frame")
+      ->capture_default_str();
+  sub->add_option("--fit", opt->fit, "camera fitted to all frames' bounds or each frame's")->capture_default_str();
+  sub->add_option("--color", opt->color, "vertex attribute with the colours")->capture_default_str();
+  sub->add_option("--every", opt->every, "render every n-th frame")->capture_default_str();
+  sub->add_flag("--no-frames", opt->no_frames, "no per-frame images (only the sheet / turntable)");
+  sub->add_option("--sheet", opt->sheet, "contact sheet of N evenly spaced frames (contact_sheet.png)");
+  sub->add_option("--sheet-size", opt->sheet_size, "tile size of the contact sheet")->capture_default_str();
+  sub->add_option("--sheet-columns", opt->sheet_columns, "columns of the contact sheet (default: square)");
+  sub->add_option("--turntable", opt->turntable, "N views around one frame (turntable.NNNN.png)");
+  sub->add_option("--turntable-frame", opt->turntable_frame, "frame number of the turntable (default: first)");
+  sub->add_option("--diff", opt->diff, "compare two PNG images per pixel instead of rendering")->expected(2);
+  sub->add_option("--diff-tolerance", opt->diff_tolerance, "channel difference counted as differing")
+      ->capture_default_str();
+  sub->add_flag("-q,--quiet", opt->quiet, "no progress line");
+  sub->callback([opt] { run_render(*opt); });
+}
+
+}  // namespace
+
+TOPOTRACK_COMMAND(120, add_render_command);
+
+}  // namespace topotrack::cli
