@@ -21,6 +21,11 @@ struct TrackerParams {
   double edge_length = 0;
   //! Voxel size of the signed distance grids of §4.3 as a multiple of L.
   double voxel_size_factor = 1.0;
+  //! ConstrainTopology(M, φ_S) tolerance, in voxels: at lattice nodes within this distance of both M and
+  //! S, φ_S takes M's sign (see agree_near_surface in tracker.cpp), so alignment error below it causes no
+  //! resampling. 0 is the paper's exact rule; then every node that M and S put on different sides makes
+  //! its cells complex.
+  double topology_tolerance = 0.5;
   //! Narrow-band half width of the signed distance grids, in voxels.
   double sdf_half_width = 3.0;
 

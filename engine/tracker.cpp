@@ -1,5 +1,7 @@
 #include "engine/tracker.hpp"
 
+#include <openvdb/tree/LeafManager.h>
+
 #include <chrono>
 
 #include "io/error.hpp"
@@ -30,6 +32,25 @@ IdField positions_by_id(const SurfaceMesh& m) {
     for (int c = 0; c < 3; ++c) f.values.push_back(float(m.position(v)[c]));
   }
   return f;
+}
+
+//! Where φ_S and φ_M disagree in sign at a lattice node that both surfaces pass within `tolerance` of,
+//! take φ_M's value: M and S are then the same surface up to the alignment error there, and the sign
+//! flip would only make ConstrainTopology(M, φ_S) resample an aligned region (the strict cell test of
+//! §4.3 compares edge crossings exactly). Topology differences larger than the tolerance are untouched.
+//! Per voxel, parallel over leaf nodes, deterministic.
+void agree_near_surface(openvdb::FloatGrid& phi_s, const openvdb::FloatGrid& phi_m, double tolerance) {
+  const float tol = float(tolerance);
+  openvdb::tree::LeafManager<openvdb::FloatTree> leaves(phi_s.tree());
+  leaves.foreach([&](openvdb::FloatTree::LeafNodeType& leaf, std::size_t) {
+    auto acc = phi_m.getConstAccessor();
+    for (auto it = leaf.beginValueOn(); it; ++it) {
+      const float s = *it;
+      if (std::abs(s) >= tol) continue;
+      const float m = acc.getValue(it.getCoord());
+      if (std::abs(m) < tol && ((s < 0) != (m < 0))) it.setValue(m);
+    }
+  });
 }
 
 }  // namespace
@@ -104,13 +125,20 @@ struct Tracker::Impl {
     }
     if (mesh.n_faces() > 0) improve(&events);  // line 7
     if (params.topology) {
-      if (mesh.n_faces() > 0) report.complex_cells_self = constrain(*distance(mesh));  // lines 8-9
-      openvdb::FloatGrid::Ptr phi_s;                                                 // line 10
-      if (theta && std::abs(theta->voxelSize()[0] - voxel_size) <= 1e-9 * voxel_size) {
-        report.complex_cells_target = constrain(*theta);
-      } else {
-        report.complex_cells_target = constrain(*distance(target));  // line 11
+      openvdb::FloatGrid::Ptr phi_m;
+      if (mesh.n_faces() > 0) {
+        phi_m = distance(mesh);                               // line 8
+        report.complex_cells_self = constrain(*phi_m);       // line 9
       }
+      openvdb::FloatGrid::Ptr phi_s;                          // line 10
+      if (theta && std::abs(theta->voxelSize()[0] - voxel_size) <= 1e-9 * voxel_size) phi_s = theta->deepCopy();
+      else phi_s = distance(target);
+      if (phi_m && params.topology_tolerance > 0) {
+        const auto t0 = Clock::now();
+        agree_near_surface(*phi_s, *phi_m, params.topology_tolerance * voxel_size);
+        report.seconds.topology += since(t0);
+      }
+      report.complex_cells_target = constrain(*phi_s);       // line 11
     }
     if (mesh.n_faces() > 0) improve(&events);  // line 12
 
