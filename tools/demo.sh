@@ -12,7 +12,7 @@ FRAMES=${FRAMES:-100}
 "$BIN" gen blobs -o "$OUT/input" --frames "$FRAMES"
 "$BIN" info "$OUT/input/blobs.0001.ply"
 "$BIN" track "$OUT/input" -o "$OUT/tracked" --progress lines
-"$BIN" eval "$OUT/tracked" --input "$OUT/input" --ground-truth "$OUT/input/ground_truth.json" -o "$OUT/eval.json"
-"$BIN" propagate "$OUT/tracked" --pattern checker --from first -o "$OUT/textured"
-"$BIN" render "$OUT/textured" -o "$OUT/pictures" --contact-sheet 6
+"$BIN" eval "$OUT/tracked" --input "$OUT/input" --ground-truth "$OUT/input/ground_truth.json" -o "$OUT/eval.json" --plots "$OUT/plots"
+"$BIN" propagate "$OUT/tracked" --source checker -o "$OUT/textured" --quiet
+"$BIN" render "$OUT/textured" -o "$OUT/pictures" --sheet 6 --no-frames --quiet
 echo "demo: pictures in $OUT/pictures, tracked frames in $OUT/tracked, evaluation in $OUT/eval.json"
