@@ -26,6 +26,9 @@ struct TrackerParams {
   //! resampling. 0 is the paper's exact rule; then every node that M and S put on different sides makes
   //! its cells complex.
   double topology_tolerance = 0.5;
+  //! Lattice nodes closer than this (in voxels) to the surface get the exact sign of the mesh (OpenVDB's
+  //! can be wrong at concave creases, which made ConstrainTopology(M, φ_M) resample clean regions).
+  double exact_sign_band = 0.25;
   //! Narrow-band half width of the signed distance grids, in voxels.
   double sdf_half_width = 3.0;
 

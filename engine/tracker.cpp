@@ -87,7 +87,7 @@ struct Tracker::Impl {
 
   openvdb::FloatGrid::Ptr distance(const SurfaceMesh& m) {
     const auto t0 = Clock::now();
-    auto grid = signed_distance(m, voxel_size, params.sdf_half_width);
+    auto grid = signed_distance(m, voxel_size, params.sdf_half_width, params.exact_sign_band);
     report.seconds.signed_distance += since(t0);
     return grid;
   }

@@ -45,7 +45,7 @@ void put(std::string& s, T v) {
 }
 
 class Reader {
-public:
+ public:
   Reader(std::string_view bytes, const std::string& name) : b_(bytes), name_(name) {}
 
   [[noreturn]] void fail_at(std::size_t offset, const std::string& what) const {
@@ -78,7 +78,7 @@ public:
     return n;
   }
 
-private:
+ private:
   std::string_view b_;
   const std::string& name_;
   std::size_t pos_ = 0;
@@ -162,8 +162,8 @@ EventList decode_events(std::string_view bytes, const std::string& name) {
   const auto lim32 = static_cast<std::uint64_t>(std::numeric_limits<std::uint32_t>::max());
   if (n_events > body / kEventHeadBytes || n_ids > body / 8 || n_rules > body / kRuleHeadBytes ||
       n_terms > body / kTermBytes || n_ids > lim32 || n_rules > lim32 || n_terms > lim32)
-    in.fail_at(16, "header counts (" + std::to_string(n_events) + " events, " + std::to_string(n_ids) + " ids, " +
-                       std::to_string(n_rules) + " rules, " + std::to_string(n_terms) +
+    in.fail_at(16, "header counts (" + std::to_string(n_events) + " events, " + std::to_string(n_ids) +
+                       " ids, " + std::to_string(n_rules) + " rules, " + std::to_string(n_terms) +
                        " terms) exceed the file size");
   in.set_end(body_end);
 
@@ -199,15 +199,18 @@ EventList decode_events(std::string_view bytes, const std::string& name) {
         t.weight = in.get<double>("a rule term");
         if (!std::isfinite(t.weight)) in.fail_at(w_at, "non-finite rule weight");
       }
-      if (r < n_fwd) list.add_forward_rule(target, buf);
-      else list.add_backward_rule(target, buf);
+      if (r < n_fwd)
+        list.add_forward_rule(target, buf);
+      else
+        list.add_backward_rule(target, buf);
     }
     list.end_event();
   }
   if (ids != n_ids || rules != n_rules || terms != n_terms)
-    in.fail_at(in.offset(), "the records hold " + std::to_string(ids) + " ids, " + std::to_string(rules) + " rules, " +
-                                std::to_string(terms) + " terms but the header says " + std::to_string(n_ids) + ", " +
-                                std::to_string(n_rules) + ", " + std::to_string(n_terms));
+    in.fail_at(in.offset(), "the records hold " + std::to_string(ids) + " ids, " + std::to_string(rules) +
+                                " rules, " + std::to_string(terms) + " terms but the header says " +
+                                std::to_string(n_ids) + ", " + std::to_string(n_rules) + ", " +
+                                std::to_string(n_terms));
   if (in.offset() != body_end)
     in.fail_at(in.offset(), std::to_string(body_end - in.offset()) + " trailing bytes after the last event");
   return list;

@@ -48,7 +48,7 @@ private:
   static std::string token_at(const char* p, const char* end) {
     const char* q = p;
     while (q < end && !is_space(*q)) ++q;
-    return std::string(p, q);
+    return text::printable(std::string_view(p, static_cast<std::size_t>(q - p)));
   }
   static const char* comment_start(const char* p, const char* end) {
     const char* hash = static_cast<const char*>(std::memchr(p, '#', static_cast<std::size_t>(end - p)));

@@ -20,12 +20,13 @@ void check(const MeshData& mesh) {
   const std::size_t V = mesh.vertex_count();
   for (std::size_t v = 0; v < V; ++v)
     for (double x : mesh.positions[v])
-      if (!std::isfinite(x)) TT_THROW(InvalidInput, "OBJ output: vertex " << v << " has a non-finite coordinate");
+      if (!std::isfinite(x))
+        TT_THROW(InvalidInput, "OBJ output: vertex " << v << " has a non-finite coordinate");
   for (std::size_t f = 0; f < mesh.triangle_count(); ++f)
     for (std::int64_t i : mesh.triangles[f])
       if (i < 0 || static_cast<std::size_t>(i) >= V)
-        TT_THROW(InvalidInput, "OBJ output: triangle " << f << " has vertex index " << i << " out of range (" << V
-                                                       << " vertices)");
+        TT_THROW(InvalidInput, "OBJ output: triangle " << f << " has vertex index " << i << " out of range ("
+                                                       << V << " vertices)");
 }
 
 // Shortest decimal that reads back to the same double, so OBJ round trips are exact.
@@ -77,7 +78,8 @@ std::string encode_obj(const MeshData& mesh) {
 
 void write_obj(const std::filesystem::path& path, const MeshData& mesh) {
   try {
-    write_file_atomic(path, [&](AtomicFileWriter& w) { encode(mesh, [&w](std::string_view s) { w.write(s); }); });
+    write_file_atomic(path,
+                      [&](AtomicFileWriter& w) { encode(mesh, [&w](std::string_view s) { w.write(s); }); });
   } catch (const InvalidInput& e) {
     TT_THROW(InvalidInput, path.string() << ": " << e.what());
   }
@@ -88,7 +90,8 @@ void write_mesh(const std::filesystem::path& path, const MeshData& mesh) {
   std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
   if (ext == ".ply") return write_ply(path, mesh);
   if (ext == ".obj") return write_obj(path, mesh);
-  TT_THROW(InvalidInput, path.string() << ": unknown mesh format '" << ext << "' for writing (expected .obj or .ply)");
+  TT_THROW(InvalidInput, path.string()
+                             << ": unknown mesh format '" << ext << "' for writing (expected .obj or .ply)");
 }
 
 }  // namespace topotrack

@@ -67,7 +67,8 @@ std::vector<Group> vertex_groups(const PlyElement& e, std::vector<bool>& taken) 
   try_group("normal", {"nx", "ny", "nz"}, "", false);
   for (std::size_t i = 0; i < e.properties.size(); ++i) {
     const std::string& n = e.properties[i].name;
-    if (taken[i] || e.properties[i].is_list || n.size() < 3 || n.compare(n.size() - 2, 2, "_0") != 0) continue;
+    if (taken[i] || e.properties[i].is_list || n.size() < 3 || n.compare(n.size() - 2, 2, "_0") != 0)
+      continue;
     const std::string base = n.substr(0, n.size() - 2);
     std::vector<std::string> names;
     for (int k = 0; free_scalar(e, taken, base + "_" + std::to_string(k)) >= 0; ++k)
@@ -94,7 +95,8 @@ VertexPlan plan_vertex(const PlyElement& e, const std::string& name) {
   for (std::uint8_t c = 0; c < 3; ++c) {
     const int i = free_scalar(e, taken, axes[c]);
     if (i < 0)
-      TT_THROW(InvalidInput, name << ":" << e.line << ": element vertex has no scalar property '" << axes[c] << "'");
+      TT_THROW(InvalidInput,
+               name << ":" << e.line << ": element vertex has no scalar property '" << axes[c] << "'");
     plan.slots[i] = Slot{Slot::Pos, c, 0, 1};
     taken[i] = true;
   }
@@ -108,7 +110,8 @@ VertexPlan plan_vertex(const PlyElement& e, const std::string& name) {
     plan.attrs.push_back(VertexAttribute{g.name, static_cast<int>(g.members.size()), {}});
     for (std::size_t c = 0; c < g.members.size(); ++c) {
       const PlyScalar t = e.properties[g.members[c]].type;
-      plan.slots[g.members[c]] = Slot{Slot::Attr, static_cast<std::uint8_t>(c), a, g.scale_ints ? colour_scale(t) : 1.0f};
+      plan.slots[g.members[c]] =
+          Slot{Slot::Attr, static_cast<std::uint8_t>(c), a, g.scale_ints ? colour_scale(t) : 1.0f};
     }
   }
   return plan;
@@ -134,15 +137,21 @@ void read_vertices(Src& src, const PlyElement& e, VertexPlan& plan, MeshData& me
         continue;
       }
       switch (s.kind) {
-        case Slot::Skip: src.skip(p.type, 1); break;
+        case Slot::Skip:
+          src.skip(p.type, 1);
+          break;
         case Slot::Pos:
           x[s.comp] = src.scalar(p.type);
-          if (!std::isfinite(x[s.comp])) src.fail("non-finite vertex coordinate in vertex " + std::to_string(v));
+          if (!std::isfinite(x[s.comp]))
+            src.fail("non-finite vertex coordinate in vertex " + std::to_string(v));
           break;
-        case Slot::Id: (*mesh.ids)[v] = src.integer(p.type); break;
+        case Slot::Id:
+          (*mesh.ids)[v] = src.integer(p.type);
+          break;
         case Slot::Attr: {
           VertexAttribute& a = plan.attrs[s.attr];
-          a.values[v * static_cast<std::size_t>(a.width) + s.comp] = static_cast<float>(src.scalar(p.type)) * s.scale;
+          a.values[v * static_cast<std::size_t>(a.width) + s.comp] =
+              static_cast<float>(src.scalar(p.type)) * s.scale;
           break;
         }
       }
@@ -200,7 +209,8 @@ void read_vertices_fixed(BinarySource<Swap>& src, const PlyElement& e, VertexPla
           src.fail_at(src.offset() + v * stride + offset[k], "vertex id is not an integer in int64 range");
       } else {
         VertexAttribute& a = plan.attrs[s.attr];
-        a.values[v * static_cast<std::size_t>(a.width) + s.comp] = static_cast<float>(load_double<Swap>(rec + offset[k], t)) * s.scale;
+        a.values[v * static_cast<std::size_t>(a.width) + s.comp] =
+            static_cast<float>(load_double<Swap>(rec + offset[k], t)) * s.scale;
       }
     }
   }
@@ -211,7 +221,8 @@ template <class Src>
 std::int64_t face_index(Src& src, PlyScalar t, std::int64_t vertex_count) {
   const std::int64_t i = src.integer(t);
   if (i < 0 || i >= vertex_count)
-    src.fail("vertex index " + std::to_string(i) + " out of range (" + std::to_string(vertex_count) + " vertices)");
+    src.fail("vertex index " + std::to_string(i) + " out of range (" + std::to_string(vertex_count) +
+             " vertices)");
   return i;
 }
 
@@ -231,7 +242,8 @@ void read_faces(Src& src, const PlyElement& e, int index_prop, std::int64_t vert
         src.skip(p.type, n);
         continue;
       }
-      if (n < 3) src.fail("face " + std::to_string(f) + " has " + std::to_string(n) + " vertices (need at least 3)");
+      if (n < 3)
+        src.fail("face " + std::to_string(f) + " has " + std::to_string(n) + " vertices (need at least 3)");
       const std::int64_t first = face_index(src, p.type, vertex_count);
       std::int64_t prev = face_index(src, p.type, vertex_count);
       for (std::uint64_t c = 2; c < n; ++c) {
@@ -246,7 +258,8 @@ void read_faces(Src& src, const PlyElement& e, int index_prop, std::int64_t vert
 // Binary faces of the usual layout (only `list uchar int|uint vertex_indices`): a tight loop over the mapped
 // bytes with the same checks and messages as read_faces.
 template <bool Swap>
-bool read_faces_fast(BinarySource<Swap>& src, const PlyElement& e, std::int64_t vertex_count, MeshData& mesh) {
+bool read_faces_fast(BinarySource<Swap>& src, const PlyElement& e, std::int64_t vertex_count,
+                     MeshData& mesh) {
   if (e.properties.size() != 1) return false;
   const PlyProperty& p = e.properties[0];
   if (!p.is_list || p.count_type != PlyScalar::U8 || (p.type != PlyScalar::I32 && p.type != PlyScalar::U32))
@@ -257,10 +270,11 @@ bool read_faces_fast(BinarySource<Swap>& src, const PlyElement& e, std::int64_t 
   const char* q = begin;
   const auto at = [&](const char* x) { return src.offset() + static_cast<std::size_t>(x - begin); };
   const auto index = [&](const char* x) -> std::int64_t {
-    const std::int64_t i = is_signed ? std::int64_t{load<std::int32_t, Swap>(x)} : std::int64_t{load<std::uint32_t, Swap>(x)};
+    const std::int64_t i =
+        is_signed ? std::int64_t{load<std::int32_t, Swap>(x)} : std::int64_t{load<std::uint32_t, Swap>(x)};
     if (i < 0 || i >= vertex_count)
-      src.fail_at(at(x), "vertex index " + std::to_string(i) + " out of range (" + std::to_string(vertex_count) +
-                             " vertices)");
+      src.fail_at(at(x), "vertex index " + std::to_string(i) + " out of range (" +
+                             std::to_string(vertex_count) + " vertices)");
     return i;
   };
   mesh.triangles.reserve(mesh.triangles.size() + e.count);
@@ -268,7 +282,9 @@ bool read_faces_fast(BinarySource<Swap>& src, const PlyElement& e, std::int64_t 
     src.at.record = f;
     if (q == end) src.truncated(at(end));
     const auto n = static_cast<std::uint8_t>(*q);
-    if (n < 3) src.fail_at(at(q), "face " + std::to_string(f) + " has " + std::to_string(n) + " vertices (need at least 3)");
+    if (n < 3)
+      src.fail_at(at(q),
+                  "face " + std::to_string(f) + " has " + std::to_string(n) + " vertices (need at least 3)");
     if (static_cast<std::size_t>(end - q - 1) < 4u * n) src.truncated(at(end));
     const char* x = q + 1;
     const std::int64_t first = index(x);
@@ -303,10 +319,12 @@ void skip_element(Src& src, const PlyElement& e) {
   }
 }
 
-// Smallest number of bytes one record can take; a count above remaining / this is a lie.
+// Smallest number of bytes one record can take (ascii: a digit and a separator per value); a count above
+// (remaining + 1) / this is a lie, rejected before anything is allocated for it.
 std::size_t min_record_bytes(const PlyElement& e, bool ascii) {
   std::size_t n = 0;
-  for (const PlyProperty& p : e.properties) n += ascii ? 1 : ply_scalar_size(p.is_list ? p.count_type : p.type);
+  for (const PlyProperty& p : e.properties)
+    n += ascii ? 2 : ply_scalar_size(p.is_list ? p.count_type : p.type);
   return n;
 }
 
@@ -323,13 +341,16 @@ void read_body(Src& src, const PlyHeader& h, const std::string& name, MeshData& 
     src.at = Position{&e, 0};
     const std::size_t min_bytes = min_record_bytes(e, ascii);
     if (min_bytes == 0) continue;  // no properties: nothing stored
-    if (e.count > src.remaining() / min_bytes)
+    if (e.count > (src.remaining() + (ascii ? 1 : 0)) / min_bytes)
       src.fail("element '" + e.name + "' declares " + std::to_string(e.count) + " records but only " +
                std::to_string(src.remaining()) + " bytes remain");
     if (&e == vertex) {
-      if constexpr (std::is_same_v<Src, AsciiSource>) read_vertices(src, e, plan, mesh);
-      else if (e.fixed_stride() > 0) read_vertices_fixed(src, e, plan, mesh);
-      else read_vertices(src, e, plan, mesh);
+      if constexpr (std::is_same_v<Src, AsciiSource>)
+        read_vertices(src, e, plan, mesh);
+      else if (e.fixed_stride() > 0)
+        read_vertices_fixed(src, e, plan, mesh);
+      else
+        read_vertices(src, e, plan, mesh);
     } else if (e.name == "face" && !faces_seen) {
       faces_seen = true;
       int index_prop = e.find("vertex_indices");
@@ -337,8 +358,10 @@ void read_body(Src& src, const PlyHeader& h, const std::string& name, MeshData& 
       if (index_prop < 0 || !e.properties[index_prop].is_list)
         TT_THROW(InvalidInput, name << ":" << e.line << ": element face has no list property vertex_indices");
       const auto V = static_cast<std::int64_t>(vertex->count);
-      if constexpr (std::is_same_v<Src, AsciiSource>) read_faces(src, e, index_prop, V, mesh);
-      else if (!read_faces_fast(src, e, V, mesh)) read_faces(src, e, index_prop, V, mesh);
+      if constexpr (std::is_same_v<Src, AsciiSource>)
+        read_faces(src, e, index_prop, V, mesh);
+      else if (!read_faces_fast(src, e, V, mesh))
+        read_faces(src, e, index_prop, V, mesh);
     } else {
       skip_element(src, e);
     }

@@ -199,7 +199,7 @@ private:
     }
   }
   [[noreturn]] void bad_token(PlyScalar t) const {
-    fail("bad " + std::string(to_string(t)) + " value '" + std::string(tok_, tok_end_) + "'");
+    fail("bad " + std::string(to_string(t)) + " value '" + text::printable(std::string_view(tok_, static_cast<std::size_t>(tok_end_ - tok_))) + "'");
   }
   [[noreturn]] void truncated() const {
     fail("truncated data: file ends in element '" + at.element->name + "' (record " +

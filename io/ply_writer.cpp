@@ -70,7 +70,8 @@ Layout plan(const MeshData& mesh, const PlyWriteOptions& options) {
       TT_THROW(InvalidInput, "PLY output: attribute name '" << a.name << "' is empty or holds whitespace");
     if (a.width < 1 || a.values.size() != V * static_cast<std::size_t>(a.width))
       TT_THROW(InvalidInput, "PLY output: attribute '" << a.name << "' has " << a.values.size()
-                                                       << " values, expected width " << a.width << " x " << V);
+                                                       << " values, expected width " << a.width << " x "
+                                                       << V);
     if (a.name == "color" && (a.width == 3 || a.width == 4)) {
       const char* n[4] = {"red", "green", "blue", "alpha"};
       for (int c = 0; c < a.width; ++c) add(n[c], PlyScalar::U8, &a, c, true);
@@ -89,14 +90,15 @@ Layout plan(const MeshData& mesh, const PlyWriteOptions& options) {
   for (std::size_t f = 0; f < mesh.triangle_count(); ++f)
     for (std::int64_t i : mesh.triangles[f])
       if (i < 0 || static_cast<std::size_t>(i) >= V)
-        TT_THROW(InvalidInput, "PLY output: triangle " << f << " has vertex index " << i << " out of range (" << V
-                                                       << " vertices)");
+        TT_THROW(InvalidInput, "PLY output: triangle " << f << " has vertex index " << i << " out of range ("
+                                                       << V << " vertices)");
   for (std::size_t v = 0; v < V; ++v)
     for (int c = 0; c < 3; ++c) {
       const double x = mesh.positions[v][c];
       if (!std::isfinite(x) || (!options.double_positions && !std::isfinite(static_cast<float>(x))))
-        TT_THROW(InvalidInput, "PLY output: vertex " << v << " has a coordinate " << x
-                                                     << (std::isfinite(x) ? " beyond float range" : " that is not finite"));
+        TT_THROW(InvalidInput, "PLY output: vertex "
+                                   << v << " has a coordinate " << x
+                                   << (std::isfinite(x) ? " beyond float range" : " that is not finite"));
     }
   L.vertex_stride = 3 * ply_scalar_size(L.pos_type);
   for (const Column& c : L.columns) L.vertex_stride += ply_scalar_size(c.type);
@@ -116,7 +118,9 @@ std::string header(const MeshData& mesh, const Layout& L, const PlyWriteOptions&
   return h;
 }
 
-std::uint8_t to_uchar(float f) { return static_cast<std::uint8_t>(std::lround(std::clamp(f, 0.0f, 1.0f) * 255.0f)); }
+std::uint8_t to_uchar(float f) {
+  return static_cast<std::uint8_t>(std::lround(std::clamp(f, 0.0f, 1.0f) * 255.0f));
+}
 
 template <class T>
 inline char* put(char* p, T v, bool swap) {
@@ -127,10 +131,13 @@ inline char* put(char* p, T v, bool swap) {
 
 // Writes the body in blocks of records into `emit`, so a file is never held twice in memory.
 class BodyWriter {
-public:
+ public:
   BodyWriter(const MeshData& mesh, const Layout& L, const PlyWriteOptions& o,
              const std::function<void(std::string_view)>& emit)
-      : m_(mesh), L_(L), o_(o), emit_(emit),
+      : m_(mesh),
+        L_(L),
+        o_(o),
+        emit_(emit),
         swap_(!o.ascii && (o.big_endian != (std::endian::native == std::endian::big))) {}
 
   void run() {
@@ -143,7 +150,7 @@ public:
     }
   }
 
-private:
+ private:
   void binary_vertices() {
     const std::size_t V = m_.vertex_count();
     for (std::size_t b = 0; b < V; b += kBlockRecords) {
@@ -206,8 +213,10 @@ private:
     for (std::size_t v = 0; v < m_.vertex_count(); ++v) {
       for (int c = 0; c < 3; ++c) {
         if (c) block_ += ' ';
-        if (L_.pos_type == PlyScalar::F64) number(m_.positions[v][c]);
-        else number(static_cast<float>(m_.positions[v][c]));
+        if (L_.pos_type == PlyScalar::F64)
+          number(m_.positions[v][c]);
+        else
+          number(static_cast<float>(m_.positions[v][c]));
       }
       for (const Column& col : L_.columns) {
         block_ += ' ';
@@ -216,8 +225,10 @@ private:
           continue;
         }
         const float f = col.attr->values[v * static_cast<std::size_t>(col.attr->width) + col.comp];
-        if (col.colour) number(static_cast<unsigned>(to_uchar(f)));
-        else number(f);
+        if (col.colour)
+          number(static_cast<unsigned>(to_uchar(f)));
+        else
+          number(f);
       }
       block_ += '\n';
       flush_if_full();
@@ -245,7 +256,8 @@ private:
   std::string block_;
 };
 
-void encode(const MeshData& mesh, const PlyWriteOptions& options, const std::function<void(std::string_view)>& emit) {
+void encode(const MeshData& mesh, const PlyWriteOptions& options,
+            const std::function<void(std::string_view)>& emit) {
   const Layout L = plan(mesh, options);
   emit(header(mesh, L, options));
   BodyWriter(mesh, L, options, emit).run();
@@ -261,9 +273,8 @@ std::string encode_ply(const MeshData& mesh, const PlyWriteOptions& options) {
 
 void write_ply(const std::filesystem::path& path, const MeshData& mesh, const PlyWriteOptions& options) {
   try {
-    write_file_atomic(path, [&](AtomicFileWriter& w) {
-      encode(mesh, options, [&w](std::string_view s) { w.write(s); });
-    });
+    write_file_atomic(
+        path, [&](AtomicFileWriter& w) { encode(mesh, options, [&w](std::string_view s) { w.write(s); }); });
   } catch (const InvalidInput& e) {
     TT_THROW(InvalidInput, path.string() << ": " << e.what());
   }

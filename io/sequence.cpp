@@ -90,7 +90,8 @@ struct Pattern {
 Pattern parse_pattern(const std::string& name, const std::string& spec) {
   Pattern pat;
   auto literal = [&](char c) {
-    if (pat.tokens.empty() || pat.tokens.back().kind != Token::Literal) pat.tokens.push_back({Token::Literal, "", 0});
+    if (pat.tokens.empty() || pat.tokens.back().kind != Token::Literal)
+      pat.tokens.push_back({Token::Literal, "", 0});
     pat.tokens.back().text += c;
   };
   auto frame = [&](int width) {
@@ -109,7 +110,9 @@ Pattern parse_pattern(const std::string& name, const std::string& spec) {
       std::size_t e = i + 1;
       while (e < name.size() && is_digit(name[e])) ++e;
       if (e < name.size() && name[e] == 'd') {
-        frame(e > i + 1 ? static_cast<int>(digits_value(std::string_view(name).substr(i + 1, std::min<std::size_t>(e - i - 1, 3)))) : 0);
+        frame(e > i + 1 ? static_cast<int>(digits_value(
+                              std::string_view(name).substr(i + 1, std::min<std::size_t>(e - i - 1, 3))))
+                        : 0);
         i = e + 1;
       } else {
         literal(c);
@@ -118,7 +121,9 @@ Pattern parse_pattern(const std::string& name, const std::string& spec) {
     } else if (c == '$' && i + 1 < name.size() && name[i + 1] == 'F') {
       std::size_t e = i + 2;
       while (e < name.size() && is_digit(name[e])) ++e;
-      frame(e > i + 2 ? static_cast<int>(digits_value(std::string_view(name).substr(i + 2, std::min<std::size_t>(e - i - 2, 3)))) : 0);
+      frame(e > i + 2 ? static_cast<int>(digits_value(
+                            std::string_view(name).substr(i + 2, std::min<std::size_t>(e - i - 2, 3))))
+                      : 0);
       i = e;
     } else if (c == '{' && i + 1 < name.size() && name[i + 1] == '}') {
       frame(0);
@@ -146,8 +151,10 @@ bool match(const Pattern& pat, std::size_t t, const std::string& name, std::size
   const Token& tok = pat.tokens[t];
   switch (tok.kind) {
     case Token::Literal:
-      return name.compare(i, tok.text.size(), tok.text) == 0 && match(pat, t + 1, name, i + tok.text.size(), number);
-    case Token::Any: return i < name.size() && match(pat, t + 1, name, i + 1, number);
+      return name.compare(i, tok.text.size(), tok.text) == 0 &&
+             match(pat, t + 1, name, i + tok.text.size(), number);
+    case Token::Any:
+      return i < name.size() && match(pat, t + 1, name, i + 1, number);
     case Token::Star:
       for (std::size_t k = i; k <= name.size(); ++k)
         if (match(pat, t + 1, name, k, number)) return true;
@@ -159,7 +166,8 @@ bool match(const Pattern& pat, std::size_t t, const std::string& name, std::size
         const std::size_t n = k - i;
         if (n > kMaxFrameDigits) continue;
         // Padded: exactly `width` digits, or more without a leading zero (frame 12345 of "####").
-        if (tok.width > 0 && !(n == static_cast<std::size_t>(tok.width) || (n > static_cast<std::size_t>(tok.width) && name[i] != '0')))
+        if (tok.width > 0 && !(n == static_cast<std::size_t>(tok.width) ||
+                               (n > static_cast<std::size_t>(tok.width) && name[i] != '0')))
           continue;
         if (match(pat, t + 1, name, k, number)) {
           number = digits_value(std::string_view(name).substr(i, n));
@@ -179,15 +187,17 @@ void sort_and_check(FrameSequence& seq, const std::string& spec) {
   });
   for (std::size_t k = 1; k < seq.frames.size(); ++k)
     if (seq.frames[k].number >= 0 && seq.frames[k].number == seq.frames[k - 1].number)
-      TT_THROW(InvalidInput, spec << ": frame number " << seq.frames[k].number << " appears twice: "
-                                  << seq.frames[k - 1].path.filename().string() << " and "
-                                  << seq.frames[k].path.filename().string());
+      TT_THROW(InvalidInput, spec << ": frame number " << seq.frames[k].number
+                                  << " appears twice: " << seq.frames[k - 1].path.filename().string()
+                                  << " and " << seq.frames[k].path.filename().string());
 
   std::vector<long> numbers;
   std::size_t unnumbered = 0;
   for (const auto& f : seq.frames) {
-    if (f.number >= 0) numbers.push_back(f.number);
-    else ++unnumbered;
+    if (f.number >= 0)
+      numbers.push_back(f.number);
+    else
+      ++unnumbered;
   }
   if (unnumbered > 0 && !numbers.empty())
     seq.warnings.push_back(spec + ": " + std::to_string(unnumbered) +
@@ -201,18 +211,21 @@ void sort_and_check(FrameSequence& seq, const std::string& spec) {
     if (d <= step) continue;
     if (++gaps <= kMaxGapWarnings) {
       const long missing = d / step - 1;
-      seq.warnings.push_back(spec + ": gap in the frame numbers: " + std::to_string(missing) + " frame(s) missing between " +
-                             std::to_string(numbers[k - 1]) + " and " + std::to_string(numbers[k]));
+      seq.warnings.push_back(spec + ": gap in the frame numbers: " + std::to_string(missing) +
+                             " frame(s) missing between " + std::to_string(numbers[k - 1]) + " and " +
+                             std::to_string(numbers[k]));
     }
   }
   if (gaps > kMaxGapWarnings)
-    seq.warnings.push_back(spec + ": " + std::to_string(gaps - kMaxGapWarnings) + " further gap(s) not listed");
+    seq.warnings.push_back(spec + ": " + std::to_string(gaps - kMaxGapWarnings) +
+                           " further gap(s) not listed");
 
   std::map<std::string, std::size_t> formats;
   for (const auto& f : seq.frames) ++formats[lower(f.path.extension().string())];
   if (formats.size() > 1) {
     std::string w = spec + ": mixed file formats:";
-    for (const auto& [ext, n] : formats) w.append(" ").append(std::to_string(n)).append(" x ").append(ext.empty() ? "(none)" : ext);
+    for (const auto& [ext, n] : formats)
+      w.append(" ").append(std::to_string(n)).append(" x ").append(ext.empty() ? "(none)" : ext);
     seq.warnings.push_back(w);
   }
 }
@@ -254,8 +267,7 @@ FrameSequence find_frames(const std::string& spec) {
   const Pattern pat = parse_pattern(name, spec);
   if (!pat.has_frame && !pat.has_wildcard) {
     // A plain path: one frame, read (and failing) as a file; a missing one is reported here.
-    if (!fs::exists(fs::symlink_status(path, ec)))
-      TT_THROW(InvalidInput, spec << ": no such file or folder");
+    if (!fs::exists(fs::symlink_status(path, ec))) TT_THROW(InvalidInput, spec << ": no such file or folder");
     seq.frames.push_back({path, frame_number_of(path)});
     return seq;
   }

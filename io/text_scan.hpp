@@ -3,9 +3,12 @@
 //! Numbers go through fast_float (floating point) and std::from_chars (integers): both ignore the
 //! C locale (strtod would read "1,5" under a German locale and is several times slower), never
 //! allocate, and report exactly where the number ended, so a reader can reject "1.5abc".
+#include <fast_float/fast_float.h>
+
 #include <charconv>
 #include <cstdint>
-#include <fast_float/fast_float.h>
+#include <string>
+#include <string_view>
 #include <system_error>
 
 namespace topotrack::text {
@@ -38,6 +41,25 @@ inline bool parse_int(const char*& p, const char* end, std::int64_t& out) {
   if (r.ec != std::errc()) return false;
   p = r.ptr;
   return true;
+}
+
+//! A token quoted in an error message: at most `max` bytes, anything but printable ASCII as \xNN, so a
+//! binary file does not write raw bytes to the terminal.
+inline std::string printable(std::string_view token, std::size_t max = 40) {
+  static constexpr char kHex[] = "0123456789abcdef";
+  std::string out;
+  for (std::size_t i = 0; i < token.size() && i < max; ++i) {
+    const auto c = static_cast<unsigned char>(token[i]);
+    if (c >= 0x20 && c < 0x7f) {
+      out += static_cast<char>(c);
+    } else {
+      out += "\\x";
+      out += kHex[c >> 4];
+      out += kHex[c & 15];
+    }
+  }
+  if (token.size() > max) out += "...";
+  return out;
 }
 
 }  // namespace topotrack::text

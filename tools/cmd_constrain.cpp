@@ -56,7 +56,7 @@ void run_constrain(const ConstrainOptions& opt) {
   } else {
     const SurfaceMesh target = load_surface_mesh(opt.target, /*require_closed=*/true);
     if (voxel <= 0) voxel = mean_edge_length(mesh);
-    theta = signed_distance(target, voxel);
+    theta = signed_distance(target, voxel, 3.0, /*exact_sign_band_voxels=*/0.25);  // as the tracker does
   }
   EventList events;
   const ConstrainReport r = constrain_topology(mesh, *theta, opt.params, opt.events.empty() ? nullptr : &events);

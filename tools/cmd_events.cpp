@@ -1,5 +1,5 @@
-// topotrack events FILE [--json] [--expand] [--summary]: print an event-list file (§4.4): counts by kind, then
-// each event with V_in, V_out and its forward and backward rules.
+// topotrack events FILE [--json] [--expand] [--summary]: print an event-list file (§4.4): counts by kind,
+// then each event with V_in, V_out and its forward and backward rules.
 #include <charconv>
 #include <cstdio>
 #include <iostream>
@@ -88,7 +88,8 @@ void run_events(const EventsOptions& opt) {
     j["rules"] = list.rule_count();
     j["terms"] = list.term_count();
     nlohmann::json by_kind;
-    for (int k = 0; k < kEventKindCount; ++k) by_kind[std::string(to_string(static_cast<EventKind>(k + 1)))] = counts[k];
+    for (int k = 0; k < kEventKindCount; ++k)
+      by_kind[std::string(to_string(static_cast<EventKind>(k + 1)))] = counts[k];
     j["counts"] = by_kind;
     if (!opt.summary) {
       j["expanded"] = opt.expand;
@@ -130,12 +131,14 @@ void run_events(const EventsOptions& opt) {
 
 void add_events_command(CLI::App& app) {
   auto opt = std::make_shared<EventsOptions>();
-  CLI::App* sub = app.add_subcommand("events", "Print an event-list file (§4.4): counts by kind, then every event "
-                                               "with V_in, V_out, forward and backward rules");
+  CLI::App* sub = app.add_subcommand("events",
+                                     "Print an event-list file (§4.4): counts by kind, then every event "
+                                     "with V_in, V_out, forward and backward rules");
   sub->add_option("FILE", opt->file, "event-list file (docs/formats.md)")->required();
   sub->add_flag("--json", opt->json, "machine-readable JSON instead of text");
-  sub->add_flag("--expand", opt->expand,
-                "print each rule in terms of vertices the event does not create (substituting earlier rules)");
+  sub->add_flag(
+      "--expand", opt->expand,
+      "print each rule in terms of vertices the event does not create (substituting earlier rules)");
   sub->add_flag("--summary", opt->summary, "print only the counts");
   sub->callback([opt] { run_events(*opt); });
 }

@@ -1,10 +1,15 @@
 // topotrack render FRAMES -o DIR: PNG pictures of frames with their colours (Embree ray tracer on the CPU),
 // camera fitted to the sequence's bounds; a contact sheet of several frames; a turntable of one frame.
+#include <cctype>
 #include <chrono>
 #include <cstdio>
 #include <iostream>
+#include <map>
+
+#include <nlohmann/json.hpp>
 
 #include "io/error.hpp"
+#include "io/mapped_file.hpp"
 #include "io/mesh_reader.hpp"
 #include "kernels/render/frame_geometry.hpp"
 #include "kernels/render/png.hpp"
@@ -32,6 +37,7 @@ struct RenderOptions {
   int turntable = 0;
   long turntable_frame = -1;
   bool no_frames = false;
+  std::string follow;
   std::vector<std::string> diff;
   int diff_tolerance = 8;
   bool quiet = false;
@@ -53,6 +59,42 @@ RenderMesh load_render_mesh(const fs::path& path, const std::string& color) {
   } catch (const InvalidInput& e) {
     TT_THROW(InvalidInput, path.string() << ": " << e.what());
   }
+}
+
+struct Motion {
+  Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();
+  Vec3 center = Vec3::Zero();
+};
+
+//! Rigid motion per frame number from a ground-truth file: {"frames": [{"frame", "rotation" 3x3, "center"}]}.
+std::map<long, Motion> read_motions(const fs::path& path) {
+  const MappedFile file(path);
+  std::map<long, Motion> out;
+  try {
+    const nlohmann::json j = nlohmann::json::parse(file.text());
+    for (const auto& f : j.at("frames")) {
+      Motion m;
+      for (int r = 0; r < 3; ++r) {
+        for (int c = 0; c < 3; ++c) m.rotation(r, c) = f.at("rotation").at(r).at(c).get<double>();
+        m.center[r] = f.at("center").at(r).get<double>();
+      }
+      out[f.at("frame").get<long>()] = m;
+    }
+  } catch (const nlohmann::json::exception& e) {
+    TT_THROW(InvalidInput, path.string() << ": not a ground-truth motion file: " << e.what());
+  }
+  return out;
+}
+
+//! The last run of digits in the file stem ("blobs.0048.ply" -> 48), or -1.
+long number_in_name(const fs::path& path) {
+  const std::string stem = path.stem().string();
+  std::size_t end = stem.size();
+  while (end > 0 && !std::isdigit(static_cast<unsigned char>(stem[end - 1]))) --end;
+  std::size_t begin = end;
+  while (begin > 0 && std::isdigit(static_cast<unsigned char>(stem[begin - 1]))) --begin;
+  if (begin == end || end - begin > 15) return -1;
+  return std::stol(stem.substr(begin, end - begin));
 }
 
 BoundingBox bounds_of(const RenderMesh& m) {
@@ -88,6 +130,8 @@ void run_render(const RenderOptions& opt) {
     frames.swap(kept);
   }
   if (frames.empty()) TT_THROW(InvalidInput, "no frames");
+  for (auto& f : frames)
+    if (f.number < 0) f.number = number_in_name(f.path);
   const fs::path out(opt.out);
   ensure_directory(out);
 
@@ -116,11 +160,18 @@ void run_render(const RenderOptions& opt) {
     }
     if (all.empty()) TT_THROW(InvalidInput, "the frames have no vertices");
   }
+  std::map<long, Motion> motions;
+  if (!opt.follow.empty()) motions = read_motions(opt.follow);
   auto camera_for = [&](std::size_t k, const RenderMesh& mesh, double aspect) {
     CameraFit f = fit;
     f.aspect = aspect;
     if (frames.size() > 1) f.azimuth_deg += opt.spin * double(k) / double(frames.size() - 1);
-    return fit_camera(opt.fit == "all" ? all : bounds_of(mesh), f);
+    const Camera cam = fit_camera(opt.fit == "all" ? all : bounds_of(mesh), f);
+    if (motions.empty()) return cam;
+    const auto it = motions.find(frames[k].number);
+    if (it == motions.end())
+      TT_THROW(InvalidInput, opt.follow << ": no motion for frame " << frames[k].number);
+    return transform_camera(cam, it->second.rotation, it->second.center);
   };
 
   double render_seconds = 0;
@@ -202,6 +253,8 @@ void add_render_command(CLI::App& app) {
   sub->add_option("--up", opt->up, "up axis: x, y, z, -y, -z")->capture_default_str();
   sub->add_option("--spin", opt->spin, "the camera turns by this many degrees from the first to the last frame")
       ->capture_default_str();
+  sub->add_option("--follow", opt->follow,
+                  "ground-truth motion file (gen's ground_truth.json): the camera moves rigidly with each frame");
   sub->add_option("--fit", opt->fit, "camera fitted to all frames' bounds or each frame's")->capture_default_str();
   sub->add_option("--color", opt->color, "vertex attribute with the colours")->capture_default_str();
   sub->add_option("--every", opt->every, "render every n-th frame")->capture_default_str();

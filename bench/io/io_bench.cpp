@@ -1,12 +1,12 @@
 // Read and write throughput of the io layer on generated closed meshes of 10k to 1M triangles (files written
 // once per size into a temporary folder), plus a real frame of ../shared/data when present.
 #include <benchmark/benchmark.h>
+#include <unistd.h>
 
 #include <cmath>
 #include <filesystem>
 #include <map>
 #include <numbers>
-#include <unistd.h>
 
 #include "io/mesh_reader.hpp"
 #include "io/obj_reader.hpp"
@@ -45,7 +45,7 @@ MeshData sphere(std::int64_t triangles) {
 
 // Generated meshes and their files, made once per size and removed at exit.
 class Files {
-public:
+ public:
   static Files& get() {
     static Files f;
     return f;
@@ -62,13 +62,15 @@ public:
   fs::path file(std::int64_t n, const std::string& kind) {
     const fs::path p = dir_ / (kind + "_" + std::to_string(n) + (kind == "obj" ? ".obj" : ".ply"));
     if (!fs::exists(p)) {
-      if (kind == "obj") write_obj(p, mesh(n));
-      else write_ply(p, mesh(n), PlyWriteOptions{kind == "ascii"});
+      if (kind == "obj")
+        write_obj(p, mesh(n));
+      else
+        write_ply(p, mesh(n), PlyWriteOptions{kind == "ascii"});
     }
     return p;
   }
 
-private:
+ private:
   Files() : dir_(fs::temp_directory_path() / ("topotrack_io_bench_" + std::to_string(::getpid()))) {
     fs::create_directories(dir_);
   }
@@ -99,10 +101,13 @@ void BM_ReadObj(benchmark::State& state) { read_bench(state, "obj"); }
 
 void write_bench(benchmark::State& state, const std::string& kind) {
   const MeshData& m = Files::get().mesh(state.range(0));
-  const fs::path p = Files::get().file(state.range(0), kind).replace_extension(kind == "obj" ? ".w.obj" : ".w.ply");
+  const fs::path p =
+      Files::get().file(state.range(0), kind).replace_extension(kind == "obj" ? ".w.obj" : ".w.ply");
   for (auto _ : state) {
-    if (kind == "obj") write_obj(p, m);
-    else write_ply(p, m, PlyWriteOptions{kind == "ascii"});
+    if (kind == "obj")
+      write_obj(p, m);
+    else
+      write_ply(p, m, PlyWriteOptions{kind == "ascii"});
   }
   count(state, m, fs::file_size(p));
 }
@@ -139,13 +144,33 @@ void BM_ReadRealFrame(benchmark::State& state) {
 }
 
 constexpr std::int64_t kMin = 10'000, kMax = 1'000'000;
-BENCHMARK(BM_ReadPlyBinary)->RangeMultiplier(10)->Range(kMin, kMax)->Unit(benchmark::kMillisecond)->UseRealTime();
-BENCHMARK(BM_ReadPlyAscii)->RangeMultiplier(10)->Range(kMin, kMax)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_ReadPlyBinary)
+    ->RangeMultiplier(10)
+    ->Range(kMin, kMax)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+BENCHMARK(BM_ReadPlyAscii)
+    ->RangeMultiplier(10)
+    ->Range(kMin, kMax)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
 BENCHMARK(BM_ReadObj)->RangeMultiplier(10)->Range(kMin, kMax)->Unit(benchmark::kMillisecond)->UseRealTime();
-BENCHMARK(BM_WritePlyBinary)->RangeMultiplier(10)->Range(kMin, kMax)->Unit(benchmark::kMillisecond)->UseRealTime();
-BENCHMARK(BM_WritePlyAscii)->RangeMultiplier(10)->Range(kMin, kMax)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_WritePlyBinary)
+    ->RangeMultiplier(10)
+    ->Range(kMin, kMax)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+BENCHMARK(BM_WritePlyAscii)
+    ->RangeMultiplier(10)
+    ->Range(kMin, kMax)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
 BENCHMARK(BM_WriteObj)->RangeMultiplier(10)->Range(kMin, kMax)->Unit(benchmark::kMillisecond)->UseRealTime();
-BENCHMARK(BM_EncodePlyBinary)->RangeMultiplier(10)->Range(kMin, kMax)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_EncodePlyBinary)
+    ->RangeMultiplier(10)
+    ->Range(kMin, kMax)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
 BENCHMARK(BM_ReadRealFrame)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 }  // namespace

@@ -19,7 +19,7 @@ int default_resolution(SyntheticKind kind) {
   switch (kind) {
     case SyntheticKind::kBlobs: return 96;
     case SyntheticKind::kMorph: return 96;
-    case SyntheticKind::kMetaballs: return 112;
+    case SyntheticKind::kMetaballs: return 128;
   }
   return 96;
 }

@@ -322,7 +322,9 @@ private:
     const Vec3 &pa = pos(a), &pb = pos(b);
     const Vec3 &pl = pos(m_.to_vertex(m_.next(h))), &pr = pos(m_.to_vertex(m_.next(SurfaceMesh::opposite(h))));
     double old_q = std::min(triangle_quality(pa, pb, pl), triangle_quality(pb, pa, pr));
-    Vec3 n_ref = (pb - pa).cross(pl - pa) + (pa - pb).cross(pr - pb);
+    const Vec3 n0 = (pb - pa).cross(pl - pa), n1 = (pa - pb).cross(pr - pb);
+    Vec3 n_ref = n0 + n1;
+    double area_sum = n0.norm() + n1.norm();
     ring_.clear();
     for (const Vertex v : {a, b}) {
       const Halfedge g0 = m_.halfedge(v);
@@ -337,12 +339,16 @@ private:
           r.n_old = (q1 - q).cross(q2 - q);
           r.n_new = (q1 - p).cross(q2 - p);
           n_ref += r.n_old;
+          area_sum += r.n_old.norm();
           old_q = std::min(old_q, triangle_quality(q, q1, q2));
           ring_.push_back(r);
         }
         g = m_.ccw_rotated(g);
       } while (g != g0);
     }
+    // Where the neighbourhood is roughly a height field (its area vectors do not cancel out) no new face
+    // may face away from it; around a thin tube or a fold that reference means nothing.
+    const bool check_ref = mode != CollapseMode::Fold && n_ref.norm() >= 0.5 * area_sum;
     double new_q = 1, dev_local = 0;
     for (const RingFace& r : ring_) {
       const double ln_new = r.n_new.norm();
@@ -354,7 +360,7 @@ private:
         if (r.n_old.dot(r.n_new) <= 0) return false;  // fold-over
         dev_local = std::max(dev_local, std::abs((p - pos(r.v)).dot(r.n_old)) / ln_old);
       }
-      if (mode != CollapseMode::Fold && r.n_new.dot(n_ref) <= 0) return false;
+      if (check_ref && r.n_new.dot(n_ref) <= 0) return false;
       dev_local = std::max(dev_local, std::abs((pos(r.v) - p).dot(r.n_new)) / ln_new);
       // In a cluster of short edges the needles around it get worse until their own short edge goes:
       // a Short collapse judges only the triangles it leaves without a short edge.

@@ -56,4 +56,13 @@ Camera orbit(const Camera& camera, const Vec3& axis, double degrees) {
   return c;
 }
 
+Camera transform_camera(const Camera& camera, const Eigen::Matrix3d& rotation, const Vec3& center) {
+  if (!rotation.allFinite() || !center.allFinite()) TT_THROW(InvalidInput, "transform_camera: non-finite motion");
+  Camera c = camera;
+  c.eye = rotation * (camera.eye - center) + center;
+  c.target = rotation * (camera.target - center) + center;
+  c.up = rotation * camera.up;
+  return c;
+}
+
 }  // namespace topotrack

@@ -33,4 +33,8 @@ Camera fit_camera(const BoundingBox& bounds, const CameraFit& params = {});
 //! The same camera rotated by `degrees` about the axis through its target along `axis` (a turntable step).
 Camera orbit(const Camera& camera, const Vec3& axis, double degrees);
 
+//! The camera moved rigidly with the scene: x -> rotation (x - center) + center applied to eye, target and up
+//! (a camera that follows a rigidly moving object, e.g. by the ground truth of `topotrack gen blobs`).
+Camera transform_camera(const Camera& camera, const Eigen::Matrix3d& rotation, const Vec3& center);
+
 }  // namespace topotrack

@@ -1,5 +1,7 @@
 #include "kernels/sdf/signed_distance.hpp"
 
+#include "kernels/sdf/exact_sign.hpp"
+
 #include <cmath>
 #include <mutex>
 #include <openvdb/tools/MeshToVolume.h>
@@ -47,7 +49,7 @@ openvdb::math::Transform::Ptr voxel_transform(double voxel_size) {
 
 openvdb::FloatGrid::Ptr signed_distance(std::span<const Vec3> positions,
                                         std::span<const std::array<Index, 3>> triangles, double voxel_size,
-                                        double half_width_voxels) {
+                                        double half_width_voxels, double exact_sign_band_voxels) {
   ensure_openvdb_initialized();
   auto xform = voxel_transform(voxel_size);
   if (!std::isfinite(half_width_voxels) || half_width_voxels < 1.0)
@@ -67,17 +69,21 @@ openvdb::FloatGrid::Ptr signed_distance(std::span<const Vec3> positions,
     TriangleAdapter mesh(positions, triangles, 1.0 / voxel_size);
     openvdb::util::NullInterrupter interrupter;
     grid = openvdb::tools::meshToVolume<openvdb::FloatGrid>(interrupter, mesh, *xform, hw, hw, 0, nullptr);
+    // OpenVDB's sign next to the surface can be wrong at concave creases (see exact_sign.hpp).
+    if (exact_sign_band_voxels > 0)
+      correct_signs_near_surface(*grid, positions, triangles, exact_sign_band_voxels * voxel_size);
   }
   grid->setTransform(xform);
   grid->setGridClass(openvdb::GRID_LEVEL_SET);
   return grid;
 }
 
-openvdb::FloatGrid::Ptr signed_distance(const SurfaceMesh& mesh, double voxel_size, double half_width_voxels) {
+openvdb::FloatGrid::Ptr signed_distance(const SurfaceMesh& mesh, double voxel_size, double half_width_voxels,
+                                        double exact_sign_band_voxels) {
   std::vector<Vec3> positions;
   std::vector<std::array<Index, 3>> triangles;
   extract_triangles(mesh, positions, triangles);
-  return signed_distance(positions, triangles, voxel_size, half_width_voxels);
+  return signed_distance(positions, triangles, voxel_size, half_width_voxels, exact_sign_band_voxels);
 }
 
 }  // namespace topotrack

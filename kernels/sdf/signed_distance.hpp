@@ -29,9 +29,12 @@ openvdb::math::Transform::Ptr voxel_transform(double voxel_size);
 //! a non-finite coordinate or a triangle index out of range. An empty mesh gives an empty grid.
 openvdb::FloatGrid::Ptr signed_distance(std::span<const Vec3> positions,
                                         std::span<const std::array<Index, 3>> triangles, double voxel_size,
-                                        double half_width_voxels = 3.0);
+                                        double half_width_voxels = 3.0, double exact_sign_band_voxels = 0.0);
 
 //! The same for the live triangles of a SurfaceMesh.
-openvdb::FloatGrid::Ptr signed_distance(const SurfaceMesh& mesh, double voxel_size, double half_width_voxels = 3.0);
+//! `exact_sign_band_voxels` > 0: voxels closer to the surface than that many voxels get their sign decided
+//! exactly (kernels/sdf/exact_sign.hpp), as ConstrainTopology needs (§4.3).
+openvdb::FloatGrid::Ptr signed_distance(const SurfaceMesh& mesh, double voxel_size, double half_width_voxels = 3.0,
+                                        double exact_sign_band_voxels = 0.0);
 
 }  // namespace topotrack

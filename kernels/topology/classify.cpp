@@ -108,15 +108,7 @@ bool is_complex(const SurfaceMesh& mesh, const LatticeCut& cut, const CellIndex&
     const Piece& pc = cut.pieces[index.piece_order[k]];
     s.verts.insert(s.verts.end(), cut.keys.begin() + pc.begin, cut.keys.begin() + pc.begin + pc.size);
   }
-  const std::size_t corners = s.verts.size();
-  s.corner.resize(corners);
-  {
-    std::size_t c = 0;
-    for (std::uint32_t k = pb; k < pe; ++k) {
-      const Piece& pc = cut.pieces[index.piece_order[k]];
-      for (int i = 0; i < pc.size; ++i) s.corner[c++] = 0;  // filled below
-    }
-  }
+  s.corner.resize(s.verts.size());
   std::sort(s.verts.begin(), s.verts.end());
   s.verts.erase(std::unique(s.verts.begin(), s.verts.end()), s.verts.end());
   const std::size_t V = s.verts.size();

@@ -42,7 +42,8 @@
 namespace topotrack {
 
 struct ConstrainParams {
-  // Cells are Θ's voxels (the voxel size is chosen when Θ is computed: ConstrainTopologyParams of the caller).
+  // The cells are Θ's voxels: the voxel size (tied to the tracked mesh's target edge length) is chosen when
+  // Θ is computed with signed_distance (kernels/sdf).
   bool record_events = true;   //!< append §4.4 events when an EventList is given
   int max_region_growth = 4;   //!< layers the complex region may grow by when a replacement check fails
 };

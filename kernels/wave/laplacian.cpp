@@ -12,6 +12,9 @@ namespace topotrack {
 
 namespace {
 
+constexpr double kMaxCot = 57.29;     // cot(1 degree)
+constexpr double kMassFloor = 0.05;   // times the mean vertex mass
+
 void check_soup(std::span<const Vec3> positions, std::span<const std::array<Index, 3>> triangles, const char* who) {
   for (std::size_t i = 0; i < positions.size(); ++i)
     if (!positions[i].allFinite()) TT_THROW(InvalidInput, who << ": vertex " << i << " is not finite");
@@ -21,13 +24,10 @@ void check_soup(std::span<const Vec3> positions, std::span<const std::array<Inde
         TT_THROW(InvalidInput, who << ": triangle " << f << " has vertex index " << v << " >= " << positions.size());
 }
 
-// cot of the angle between a and b, safe for degenerate corners.
+// cot of the angle between a and b (0 for a degenerate corner; callers skip degenerate triangles).
 double cot(const Vec3& a, const Vec3& b) {
-  const double s = a.cross(b).norm();
-  const double c = a.dot(b);
-  const double floor = 1e-12 * a.norm() * b.norm();
-  if (!(s > floor)) return 0.0;
-  return c / s;
+  const double sn = a.cross(b).norm();
+  return sn > 0 ? a.dot(b) / sn : 0.0;
 }
 
 }  // namespace
@@ -49,10 +49,20 @@ CotanLaplacian cotan_laplacian(std::span<const Vec3> positions, std::span<const 
     const Vec3& p1 = positions[t[1]];
     const Vec3& p2 = positions[t[2]];
     const double area = 0.5 * (p1 - p0).cross(p2 - p0).norm();
-    if (!(area > 0)) continue;
+    const double longest = std::max({(p1 - p0).squaredNorm(), (p2 - p1).squaredNorm(), (p0 - p2).squaredNorm()});
+    if (!(area > 1e-12 * longest)) continue;  // a needle or a cap: no stiffness, no mass
+    double c[3];
+    double worst = 0;
     for (int k = 0; k < 3; ++k) {
       const Index a = t[k], b = t[(k + 1) % 3], o = t[(k + 2) % 3];
-      const double w = 0.5 * cot(positions[a] - positions[o], positions[b] - positions[o]);
+      c[k] = cot(positions[a] - positions[o], positions[b] - positions[o]);
+      worst = std::max(worst, std::abs(c[k]));
+    }
+    // Slivers: scale the whole element (which keeps it positive semi-definite, unlike clamping one cot).
+    const double scale = worst > kMaxCot ? kMaxCot / worst : 1.0;
+    for (int k = 0; k < 3; ++k) {
+      const Index a = t[k], b = t[(k + 1) % 3];
+      const double w = 0.5 * scale * c[k];
       entries.push_back({a, b, w});
       entries.push_back({b, a, w});
       L.mass[t[k]] += area / 3;
@@ -75,7 +85,7 @@ CotanLaplacian cotan_laplacian(std::span<const Vec3> positions, std::span<const 
   for (std::size_t i = 0; i < n; ++i) L.row_begin[i + 1] += L.row_begin[i];
   double total = 0;
   for (double m : L.mass) total += m;
-  const double floor = n ? 1e-12 * std::max(total / n, 1e-300) : 0;
+  const double floor = n ? kMassFloor * std::max(total / n, 1e-300) : 0;
   for (double& m : L.mass) m = std::max(m, floor);
   return L;
 }

@@ -27,8 +27,11 @@ struct CotanLaplacian {
   double max_eigenvalue_bound() const;
 };
 
-//! Build C and M for a triangle soup. Degenerate triangles contribute nothing; a vertex no triangle
-//! touches gets the mass floor (1e-12 times the mean mass) so M stays invertible.
+//! Build C and M for a triangle soup. Robust on tracked meshes with slivers: a triangle with area below
+//! 1e-12 times its longest edge squared contributes nothing; a triangle with a cotangent beyond cot(1 deg) has
+//! all its weights scaled so the largest is cot(1 deg) (a positive scaling keeps C positive semi-definite, so
+//! the explicit integrator stays stable and energy-conserving); masses are floored at 0.05 times the mean
+//! mass (vertices of slivers only) so M^-1 C, and with it the CFL sub-step count, stays bounded.
 //! \throw InvalidInput on an index out of range or a non-finite position.
 CotanLaplacian cotan_laplacian(std::span<const Vec3> positions, std::span<const std::array<Index, 3>> triangles);
 

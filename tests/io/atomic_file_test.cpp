@@ -1,9 +1,10 @@
 // Atomic writes: the target holds either the old bytes or the complete new ones; no temporary is left behind.
+#include "io/atomic_file.hpp"
+
 #include <gtest/gtest.h>
 
 #include <stdexcept>
 
-#include "io/atomic_file.hpp"
 #include "io/error.hpp"
 #include "io/event_file.hpp"
 #include "io/ply_writer.hpp"

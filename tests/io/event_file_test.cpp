@@ -1,4 +1,6 @@
 // The binary event-list file: round trips, and rejection of every truncation, byte flip and lying count.
+#include "io/event_file.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -6,7 +8,6 @@
 #include <limits>
 
 #include "io/error.hpp"
-#include "io/event_file.hpp"
 #include "tests/io/temp_dir.hpp"
 
 namespace topotrack {

@@ -1,10 +1,10 @@
 // The PLY and OBJ readers on hand-written inputs: encodings, property types, polygons, skipped elements, and
 // the rejection of malformed input with the file and the position in the message.
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 
 #include <algorithm>
 #include <cstring>
-#include <sys/stat.h>
 
 #include "io/error.hpp"
 #include "io/mapped_file.hpp"
@@ -17,15 +17,20 @@ namespace topotrack {
 namespace {
 
 const std::string kAsciiQuad =
-    "ply\nformat ascii 1.0\ncomment a quad and a triangle\nelement vertex 5\nproperty float x\nproperty float y\n"
+    "ply\nformat ascii 1.0\ncomment a quad and a triangle\nelement vertex 5\nproperty float x\nproperty "
+    "float y\n"
     "property float z\nproperty uchar red\nproperty uchar green\nproperty uchar blue\nelement face 2\n"
-    "property list uchar int vertex_indices\nelement edge 1\nproperty int vertex1\nproperty int vertex2\nend_header\n"
-    "0 0 0 255 0 0\n1 0 0 0 255 0\n1 1 0 0 0 255\n0 1 0 0 0 0\n0.5 0.5 1e0 255 255 255\n4 0 1 2 3\n3 0 1 4\n0 1\n";
+    "property list uchar int vertex_indices\nelement edge 1\nproperty int vertex1\nproperty int "
+    "vertex2\nend_header\n"
+    "0 0 0 255 0 0\n1 0 0 0 255 0\n1 1 0 0 0 255\n0 1 0 0 0 0\n0.5 0.5 1e0 255 255 255\n4 0 1 2 3\n3 0 1 "
+    "4\n0 1\n";
 
 void expect_invalid(std::string_view bytes, bool ply, const std::string& text) {
   try {
-    if (ply) parse_ply(bytes, "in.ply");
-    else parse_obj(bytes, "in.obj");
+    if (ply)
+      parse_ply(bytes, "in.ply");
+    else
+      parse_obj(bytes, "in.obj");
     ADD_FAILURE() << "no exception, expected " << text;
   } catch (const InvalidInput& e) {
     const std::string what = e.what();
@@ -46,9 +51,11 @@ TEST(PlyReader, AsciiPolygonsAreFanTriangulatedAndOtherElementsSkipped) {
 
 // Binary body of a two-triangle mesh with uint8 counts and uint32 indices, in either byte order.
 std::string binary_mesh(bool big, const std::string& count_type = "uchar") {
-  std::string s = std::string("ply\nformat ") + (big ? "binary_big_endian" : "binary_little_endian") +
-                  " 1.0\nelement vertex 4\nproperty double x\nproperty double y\nproperty double z\nproperty short id\n"
-                  "element face 2\nproperty list " + count_type + " uint vertex_indices\nend_header\n";
+  std::string s =
+      std::string("ply\nformat ") + (big ? "binary_big_endian" : "binary_little_endian") +
+      " 1.0\nelement vertex 4\nproperty double x\nproperty double y\nproperty double z\nproperty short id\n"
+      "element face 2\nproperty list " +
+      count_type + " uint vertex_indices\nend_header\n";
   auto put = [&](const void* p, std::size_t n) {
     std::string b(static_cast<const char*>(p), n);
     if (big) std::reverse(b.begin(), b.end());
@@ -63,7 +70,8 @@ std::string binary_mesh(bool big, const std::string& count_type = "uchar") {
     put(&id, 2);
   }
   for (int f = 0; f < 2; ++f) {
-    if (count_type == "uchar") s += '\3';
+    if (count_type == "uchar")
+      s += '\3';
     else {
       const std::uint16_t n = 3;
       put(&n, 2);
@@ -103,16 +111,19 @@ TEST(PlyReader, HeaderFaults) {
   expect_invalid("ply\nformat ascii 1.0\nelement vertex -1\n", true, "bad element count");
   expect_invalid("ply\nformat ascii 1.0\nproperty float x\n", true, "property before any element");
   expect_invalid("ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\n", true, "without end_header");
-  expect_invalid("ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nend_header\n0 0\n",
-                 true, "no scalar property 'z'");
-  expect_invalid("ply\nformat ascii 1.0\nelement vertex 18446744073709551615\nproperty float x\nproperty float y\n"
-                 "property float z\nend_header\n0 0 0\n",
-                 true, "declares");
+  expect_invalid(
+      "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nend_header\n0 0\n", true,
+      "no scalar property 'z'");
+  expect_invalid(
+      "ply\nformat ascii 1.0\nelement vertex 18446744073709551615\nproperty float x\nproperty float y\n"
+      "property float z\nend_header\n0 0 0\n",
+      true, "declares");
 }
 
 TEST(PlyReader, AsciiFaults) {
-  const std::string head = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
-                           "property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n";
+  const std::string head =
+      "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+      "property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n";
   expect_invalid(head + "0 0 0\n1 0 0\n0 1 nan\n3 0 1 2\n", true, "non-finite");
   expect_invalid(head + "0 0 0\n1 0 0\n0 1 abc\n3 0 1 2\n", true, "in.ply:12: bad float value 'abc'");
   expect_invalid(head + "0 0 0\n1 0 0\n0 1 0\n3 0 1 3\n", true, "vertex index 3 out of range");
@@ -123,9 +134,29 @@ TEST(PlyReader, AsciiFaults) {
   expect_invalid(head + "0 0 0\n1 0 0\n0 1 0\n300 0 1 2\n", true, "bad uchar value '300'");
 }
 
+TEST(PlyReader, AsciiLyingCountIsRejectedBeforeAllocation) {
+  const std::string head =
+      "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\n"
+      "property float z\nend_header\n";
+  EXPECT_NO_THROW(parse_ply(head + "0 0 0\n1 0 0\n0 1 0\n0 0 1", "in.ply"));  // no final newline
+  std::string lying = head + "0 0 0\n1 0 0\n0 1 0\n0 0 1\n";
+  lying.replace(lying.find("vertex 4"), 8, "vertex 5");
+  expect_invalid(lying, true, "element 'vertex' declares 5 records but only 24 bytes remain");
+}
+
+TEST(Readers, BinaryGarbageIsQuotedPrintably) {
+  expect_invalid(std::string("v 0 0 \x01\xff\n", 9), false, "non-numeric token '\\x01\\xff' in vertex");
+  expect_invalid("v 0 0 " + std::string(100, 'z') + "\n", false, "'" + std::string(40, 'z') + "...'");
+  const std::string head =
+      "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n"
+      "property float z\nend_header\n";
+  expect_invalid(head + "0 0 \x7f\n", true, "bad float value '\\x7f'");
+}
+
 TEST(ObjReader, CornersNegativeIndicesAndPolygons) {
-  const std::string text = "# c\nmtllib x.mtl\nv 0 0 0\nv 1 0 0 1.0\nv 1 1 0 0.5 0.5 0.5\nvt 0 0\nvn 0 0 1\n"
-                           "v 0 1 0\ng group\ns off\nf 1/1/1 2/1/1 3//1 4\nf -4 -3 -1\n";
+  const std::string text =
+      "# c\nmtllib x.mtl\nv 0 0 0\nv 1 0 0 1.0\nv 1 1 0 0.5 0.5 0.5\nvt 0 0\nvn 0 0 1\n"
+      "v 0 1 0\ng group\ns off\nf 1/1/1 2/1/1 3//1 4\nf -4 -3 -1\n";
   const MeshData m = parse_obj(text, "in.obj");
   ASSERT_EQ(m.vertex_count(), 4u);
   EXPECT_EQ(m.triangles, (std::vector<std::array<std::int64_t, 3>>{{0, 1, 2}, {0, 2, 3}, {0, 1, 3}}));

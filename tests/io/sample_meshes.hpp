@@ -58,7 +58,8 @@ inline MeshData uv_sphere(int rings, int segments) {
       m.triangles.push_back({ring(r, s), ring(r + 1, s), ring(r + 1, s + 1)});
       m.triangles.push_back({ring(r, s), ring(r + 1, s + 1), ring(r, s + 1)});
     }
-  for (int s = 0; s < segments; ++s) m.triangles.push_back({south, ring(rings - 1, s + 1), ring(rings - 1, s)});
+  for (int s = 0; s < segments; ++s)
+    m.triangles.push_back({south, ring(rings - 1, s + 1), ring(rings - 1, s)});
   return m;
 }
 

@@ -1,8 +1,10 @@
-// Frame-sequence discovery on temporary folders: every pattern kind, sorting, gaps, duplicates, mixed formats.
+// Frame-sequence discovery on temporary folders: every pattern kind, sorting, gaps, duplicates, mixed
+// formats.
+#include "io/sequence.hpp"
+
 #include <gtest/gtest.h>
 
 #include "io/error.hpp"
-#include "io/sequence.hpp"
 #include "tests/io/temp_dir.hpp"
 
 namespace topotrack {
@@ -37,19 +39,21 @@ void expect_invalid(const std::string& spec, const std::string& text) {
 
 TEST(FindFrames, FolderSortsByFrameNumber) {
   TempDir d;
-  for (const char* n : {"a.0010.ply", "a.0002.ply", "a.0001.ply", "a.0003.ply", "notes.txt", ".a.0004.ply.tmp-1-0",
-                        ".hidden.0005.ply"})
+  for (const char* n : {"a.0010.ply", "a.0002.ply", "a.0001.ply", "a.0003.ply", "notes.txt",
+                        ".a.0004.ply.tmp-1-0", ".hidden.0005.ply"})
     d.write(n);
   std::filesystem::create_directory(d / "sub.0006.ply");
   const FrameSequence s = find_frames(d.path().string());
   EXPECT_EQ(numbers(s), (std::vector<long>{1, 2, 3, 10}));
   EXPECT_EQ(s.frames[0].path, d / "a.0001.ply");
-  EXPECT_TRUE(any_warning_has(s, "6 frame(s) missing between 3 and 10")) << ::testing::PrintToString(s.warnings);
+  EXPECT_TRUE(any_warning_has(s, "6 frame(s) missing between 3 and 10"))
+      << ::testing::PrintToString(s.warnings);
 }
 
 TEST(FindFrames, NaturalSortOfUnpaddedNumbers) {
   TempDir d;
-  for (const char* n : {"frame_10.obj", "frame_2.obj", "frame_1.obj", "frame_9.obj", "frame_11.obj"}) d.write(n);
+  for (const char* n : {"frame_10.obj", "frame_2.obj", "frame_1.obj", "frame_9.obj", "frame_11.obj"})
+    d.write(n);
   const FrameSequence s = find_frames(d.path().string());
   EXPECT_EQ(numbers(s), (std::vector<long>{1, 2, 9, 10, 11}));
 }
@@ -67,7 +71,8 @@ TEST(FindFrames, ExtensionsAreCaseInsensitiveAndVdbCounts) {
 
 TEST(FindFrames, HashPatternIsPadded) {
   TempDir d;
-  for (const char* n : {"a.0001.ply", "a.0002.ply", "a.01.ply", "a.12345.ply", "a.0003.obj", "b.0004.ply", "a.01234.ply"})
+  for (const char* n :
+       {"a.0001.ply", "a.0002.ply", "a.01.ply", "a.12345.ply", "a.0003.obj", "b.0004.ply", "a.01234.ply"})
     d.write(n);
   const FrameSequence s = find_frames((d / "a.####.ply").string());
   EXPECT_EQ(names(s), (std::vector<std::string>{"a.0001.ply", "a.0002.ply", "a.12345.ply"}));
@@ -109,7 +114,8 @@ TEST(FindFrames, FrameFieldInsideTheName) {
 
 TEST(FindFrames, Glob) {
   TempDir d;
-  for (const char* n : {"out_3.ply", "out_1.ply", "out_2.ply", "out_2.obj", "in_4.ply", "out_12.ply"}) d.write(n);
+  for (const char* n : {"out_3.ply", "out_1.ply", "out_2.ply", "out_2.obj", "in_4.ply", "out_12.ply"})
+    d.write(n);
   EXPECT_EQ(numbers(find_frames((d / "out_*.ply").string())), (std::vector<long>{1, 2, 3, 12}));
   EXPECT_EQ(numbers(find_frames((d / "out_?.ply").string())), (std::vector<long>{1, 2, 3}));
   EXPECT_EQ(names(find_frames((d / "*_1.*").string())), (std::vector<std::string>{"out_1.ply"}));
@@ -124,7 +130,8 @@ TEST(FindFrames, StrideIsNotAGap) {
   EXPECT_TRUE(s.warnings.empty()) << ::testing::PrintToString(s.warnings);
   d.write("f.0050.ply");
   const FrameSequence t = find_frames(d.path().string());
-  EXPECT_TRUE(any_warning_has(t, "1 frame(s) missing between 30 and 50")) << ::testing::PrintToString(t.warnings);
+  EXPECT_TRUE(any_warning_has(t, "1 frame(s) missing between 30 and 50"))
+      << ::testing::PrintToString(t.warnings);
 }
 
 TEST(FindFrames, ManyGapsAreSummarised) {
@@ -143,7 +150,8 @@ TEST(FindFrames, MixedFormatsWarn) {
   d.write("a.0003.ply");
   const FrameSequence s = find_frames((d / "a.####.*").string());
   EXPECT_EQ(numbers(s), (std::vector<long>{1, 2, 3}));
-  EXPECT_TRUE(any_warning_has(s, "mixed file formats: 1 x .obj 2 x .ply")) << ::testing::PrintToString(s.warnings);
+  EXPECT_TRUE(any_warning_has(s, "mixed file formats: 1 x .obj 2 x .ply"))
+      << ::testing::PrintToString(s.warnings);
 }
 
 TEST(FindFrames, DuplicateFrameNumbersAreRejected) {

@@ -1,17 +1,17 @@
 #pragma once
 // A fresh temporary folder per test, removed afterwards.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <filesystem>
 #include <fstream>
 #include <random>
 #include <string>
-#include <unistd.h>
 
 namespace topotrack::test {
 
 class TempDir {
-public:
+ public:
   TempDir() {
     const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
     std::string name = "topotrack_io_";
@@ -42,12 +42,13 @@ public:
   //! Names of every entry in the folder, hidden ones included.
   std::vector<std::string> entries() const {
     std::vector<std::string> out;
-    for (const auto& e : std::filesystem::directory_iterator(path_)) out.push_back(e.path().filename().string());
+    for (const auto& e : std::filesystem::directory_iterator(path_))
+      out.push_back(e.path().filename().string());
     std::sort(out.begin(), out.end());
     return out;
   }
 
-private:
+ private:
   std::filesystem::path path_;
 };
 

@@ -27,8 +27,11 @@ void expect_same(const MeshData& a, const MeshData& b, bool exact_positions) {
   ASSERT_EQ(a.triangles, b.triangles);
   for (std::size_t v = 0; v < a.vertex_count(); ++v)
     for (int c = 0; c < 3; ++c) {
-      if (exact_positions) EXPECT_EQ(b.positions[v][c], a.positions[v][c]) << "vertex " << v << " axis " << c;
-      else EXPECT_EQ(static_cast<float>(b.positions[v][c]), static_cast<float>(a.positions[v][c])) << "vertex " << v;
+      if (exact_positions)
+        EXPECT_EQ(b.positions[v][c], a.positions[v][c]) << "vertex " << v << " axis " << c;
+      else
+        EXPECT_EQ(static_cast<float>(b.positions[v][c]), static_cast<float>(a.positions[v][c]))
+            << "vertex " << v;
     }
   EXPECT_EQ(a.ids, b.ids);
   ASSERT_EQ(a.attributes.size(), b.attributes.size());
@@ -39,7 +42,8 @@ void expect_same(const MeshData& a, const MeshData& b, bool exact_positions) {
     EXPECT_EQ(x.width, y.width);
     ASSERT_EQ(x.values.size(), y.values.size()) << x.name;
     const float tol = x.name == "color" ? 0.5f / 255.0f + 1e-6f : 0.0f;
-    for (std::size_t i = 0; i < x.values.size(); ++i) EXPECT_NEAR(x.values[i], y.values[i], tol) << x.name << "[" << i << "]";
+    for (std::size_t i = 0; i < x.values.size(); ++i)
+      EXPECT_NEAR(x.values[i], y.values[i], tol) << x.name << "[" << i << "]";
   }
 }
 
@@ -54,8 +58,9 @@ TEST_P(PlyRoundTrip, AttributedMesh) {
   const MeshData m = attributed_octahedron();
   const PlyWriteOptions o = GetParam().options;
   const std::string bytes = encode_ply(m, o);
-  const std::string fmt = o.ascii ? "format ascii 1.0" : o.big_endian ? "format binary_big_endian 1.0"
-                                                                    : "format binary_little_endian 1.0";
+  const std::string fmt = o.ascii        ? "format ascii 1.0"
+                          : o.big_endian ? "format binary_big_endian 1.0"
+                                         : "format binary_little_endian 1.0";
   EXPECT_NE(bytes.find(fmt), std::string::npos);
   expect_same(m, parse_ply(bytes, "mem.ply"), o.double_positions);
 }
@@ -71,14 +76,16 @@ TEST_P(PlyRoundTrip, ThroughFile) {
 
 TEST_P(PlyRoundTrip, LargeIdsUseInt64) {
   MeshData m = octahedron();
-  m.ids = std::vector<std::int64_t>{0, 1, std::int64_t{1} << 40, -5, std::numeric_limits<std::int64_t>::max(), 2};
+  m.ids =
+      std::vector<std::int64_t>{0, 1, std::int64_t{1} << 40, -5, std::numeric_limits<std::int64_t>::max(), 2};
   const std::string bytes = encode_ply(m, GetParam().options);
   EXPECT_NE(bytes.find("property int64 id"), std::string::npos);
   expect_same(m, parse_ply(bytes, "mem.ply"), GetParam().options.double_positions);
 }
 
 INSTANTIATE_TEST_SUITE_P(Encodings, PlyRoundTrip,
-                         ::testing::Values(Encoding{"binary_le", {}}, Encoding{"binary_be", {false, false, true}},
+                         ::testing::Values(Encoding{"binary_le", {}},
+                                           Encoding{"binary_be", {false, false, true}},
                                            Encoding{"ascii", {true, false, false}},
                                            Encoding{"binary_le_double", {false, true, false}},
                                            Encoding{"binary_be_double", {false, true, true}},
@@ -97,9 +104,10 @@ TEST(PlyWriter, DefaultIsBinaryLittleEndianFloat) {
 
 TEST(PlyWriter, PropertyNamesFollowTheConventions) {
   const std::string h = encode_ply(attributed_octahedron(), {true});
-  for (const char* p : {"property int id\n", "property uchar red\n", "property uchar green\n", "property uchar blue\n",
-                        "property float vx\n", "property float vz\n", "property float nx\n", "property float curvature\n",
-                        "property float uv_0\n", "property float uv_1\n", "property float paint\n"})
+  for (const char* p :
+       {"property int id\n", "property uchar red\n", "property uchar green\n", "property uchar blue\n",
+        "property float vx\n", "property float vz\n", "property float nx\n", "property float curvature\n",
+        "property float uv_0\n", "property float uv_1\n", "property float paint\n"})
     EXPECT_NE(h.find(p), std::string::npos) << p;
 }
 

@@ -63,7 +63,7 @@ std::vector<Case> random_cases() {
 TEST(Improve, MeetsTargetsOnMarchingTetrahedraMeshes) {
   const std::vector<Case> cases = {{"mt_torus_50", test::mt_torus(50)},
                                    {"mt_ellipsoid_40", test::mt_ellipsoid(40, Vec3(1.0, 0.7, 0.5))},
-                                   {"mt_thin_torus_60", test::mt_torus(60, 1.0, 0.2)}};
+                                   {"mt_thin_torus_70", test::mt_torus(70, 1.0, 0.2)}};
   for (const Case& c : cases) {
     const SurfaceMesh in = c.soup.mesh();
     SurfaceMesh out = in.clone();

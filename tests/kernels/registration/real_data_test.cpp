@@ -18,6 +18,7 @@ struct Figures {
   test::AlignmentError unaligned, aligned, projected;
 };
 
+// Environment knobs for comparisons: TOPOTRACK_TEST_CHOLESKY=eigen, TOPOTRACK_TEST_PCG=1.
 Figures run_pair(const std::string& name, int frame, int gap) {
   test::AlignmentPair pair = test::make_pair(name, frame, gap);
   const TargetSurface target = TargetSurface::from_mesh(pair.target_mesh);
@@ -31,10 +32,6 @@ Figures run_pair(const std::string& name, int frame, int gap) {
   if (const char* e = std::getenv("TOPOTRACK_TEST_CHOLESKY"); e && std::string(e) == "eigen")
     params.solver = CholeskyBackend::EigenLDLT;
   if (std::getenv("TOPOTRACK_TEST_PCG")) params.linear_solver = CoarseLinearSolver::SeparablePCG;
-  if (const char* e = std::getenv("TOPOTRACK_TEST_REGMIN")) params.alpha_reg_min = std::atof(e);
-  if (const char* e = std::getenv("TOPOTRACK_TEST_PERLEVEL")) params.max_iterations_per_level = std::atoi(e);
-  if (const char* e = std::getenv("TOPOTRACK_TEST_TOL")) params.convergence_tolerance = std::atof(e);
-  if (const char* e = std::getenv("TOPOTRACK_TEST_PCG_TOL")) params.pcg_tolerance = std::atof(e);
   const CoarseReport c = align_coarse(mesh, target, params);
   const FineReport fr = align_fine(mesh, target);
   f.aligned = test::alignment_error(mesh, pair.truth, target, pair.diagonal);
@@ -61,14 +58,24 @@ void expect_improvement(const Figures& f, double max_ratio_to_unaligned) {
   EXPECT_GT(f.projected.mean_truth, f.aligned.mean_truth);
 }
 
+#define TOPOTRACK_REQUIRE_DATA(name)                                                          \
+  if (!std::filesystem::exists(test::data_frame(name, 16))) GTEST_SKIP() << "no " << name << " data"
+
 TEST(RealData, SambaLargeMotion) {
+  TOPOTRACK_REQUIRE_DATA("samba");
   const Figures f = run_pair("samba", 1, 15);
   expect_improvement(f, 0.35);
   EXPECT_LE(f.aligned.mean_truth, 0.0035);
   EXPECT_LE(f.aligned.mean_target, 0.001);
 }
-TEST(RealData, PcowLargeMotion) { expect_improvement(run_pair("pcow", 1, 15), 0.95); }
-TEST(RealData, ElephantLargeMotion) { expect_improvement(run_pair("elephant", 1, 15), 0.95); }
+TEST(RealData, PcowLargeMotion) {
+  TOPOTRACK_REQUIRE_DATA("pcow");
+  expect_improvement(run_pair("pcow", 1, 15), 0.95);
+}
+TEST(RealData, ElephantLargeMotion) {
+  TOPOTRACK_REQUIRE_DATA("elephant");
+  expect_improvement(run_pair("elephant", 1, 15), 0.95);
+}
 
 }  // namespace
 }  // namespace topotrack

@@ -166,6 +166,27 @@ TEST(ConstrainTopology, ComponentsAppearAndVanish) {
   EXPECT_EQ(c.forward_begin, c.forward_end);
 }
 
+TEST(ConstrainTopology, WholeMeshVanishesOrAppears) {
+  const double h = 0.05;
+  GridPtr empty = openvdb::FloatGrid::create(float(3 * h));
+  empty->setTransform(voxel_transform(h));
+  empty->setGridClass(openvdb::GRID_LEVEL_SET);
+  SurfaceMesh m = test::icosphere(3, 0.5).mesh();
+  EventList ev;
+  ConstrainReport r = constrain_topology(m, *empty, {}, &ev);
+  EXPECT_EQ(m.n_vertices(), 0u);
+  EXPECT_EQ(r.patches_deleted, 1u);
+  EXPECT_EQ(ev.size(), 1u);
+  // And back: an empty mesh constrained to a ball becomes that ball, with fresh ids.
+  SurfaceMesh none;
+  GridPtr ball = sphere(0.5, Vec3::Zero(), h);
+  r = constrain_topology(none, *ball);
+  expect_sound(none);
+  EXPECT_EQ(connected_components(none), 1u);
+  EXPECT_EQ(euler_characteristic(none), 2);
+  EXPECT_EQ(r.patches_created, 1u);
+}
+
 TEST(ConstrainTopology, EventsPropagateAffineFieldsExactlyAtCutsAndConstantsEverywhere) {
   const double h = 0.04;
   SurfaceMesh m = mc_mesh(*unite(sphere(0.5, {-0.42, 0, 0}, h), sphere(0.5, {0.42, 0, 0}, h)));

@@ -3,8 +3,6 @@
 // piercing the other, touching excluded), over a uniform grid of triangle bounding boxes. Vertices closer
 // than 1e-9 of the grid spacing count as shared (degenerate configurations touch, they do not cross).
 #include <algorithm>
-#include <cstdio>
-#include <cstdlib>
 #include <cmath>
 #include <unordered_map>
 #include <vector>
@@ -61,10 +59,6 @@ inline std::size_t count_self_intersections(const SurfaceMesh& mesh,
         for (int e = 0; e < 3 && !hit; ++e) {
           hit = segment_hits_triangle(P[A[e]], P[A[(e + 1) % 3]], P[B[0]], P[B[1]], P[B[2]], eps) ||
                 segment_hits_triangle(P[B[e]], P[B[(e + 1) % 3]], P[A[0]], P[A[1]], P[A[2]], eps);
-        }
-        if (hit && std::getenv("SI_DEBUG")) {
-          for (Index a : A) std::fprintf(stderr, "A %u %.17g %.17g %.17g\n", a, P[a].x(), P[a].y(), P[a].z());
-          for (Index b : B) std::fprintf(stderr, "B %u %.17g %.17g %.17g\n", b, P[b].x(), P[b].y(), P[b].z());
         }
         if (hit) hits.emplace_back(std::min(list[i], list[j]), std::max(list[i], list[j]));
       }
