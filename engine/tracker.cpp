@@ -80,9 +80,19 @@ struct Tracker::Impl {
   //! ConstrainTopology(M, Θ) (§4.3), timed into the topology column.
   std::size_t constrain(const openvdb::FloatGrid& theta) {
     const auto t0 = Clock::now();
-    const ConstrainReport r = constrain_topology(mesh, theta, params.constrain, &events);
+    // A failed local replacement leaves M as it was (constrain_topology commits only a valid result):
+    // the frame goes on without this topology step, and the failure is reported, not hidden.
+    EventList ev;
+    std::size_t cells = 0;
+    try {
+      cells = constrain_topology(mesh, theta, params.constrain, &ev).complex_cells;
+      events.append(ev);
+    } catch (const TopologyError& e) {
+      ++report.topology_failures;
+      report.warnings.push_back(std::string("ConstrainTopology skipped: ") + e.what());
+    }
     report.seconds.topology += since(t0);
-    return r.complex_cells;
+    return cells;
   }
 
   openvdb::FloatGrid::Ptr distance(const SurfaceMesh& m) {

@@ -75,6 +75,8 @@ nlohmann::json frame_json(const FrameReport& r, long number, double io_seconds) 
           {"euler", r.euler},
           {"events", ev},
           {"complex_cells", {{"self", r.complex_cells_self}, {"target", r.complex_cells_target}}},
+          {"topology_failures", r.topology_failures},
+          {"warnings", r.warnings},
           {"iterations", {{"coarse", r.coarse_iterations}, {"fine_cg", r.fine_iterations}}},
           {"seconds",
            {{"coarse", r.seconds.coarse},
@@ -182,6 +184,7 @@ void run_track(TrackOptions opt) {
     const std::string name = f.path.string();
     const FrameReport& r = frame.grid ? tracker.add_frame(*frame.grid, name) : tracker.add_frame(frame.mesh, name);
 
+    for (const auto& w : r.warnings) progress.message("warning: frame " + std::to_string(f.number) + ": " + w);
     progress.stage(i, f.number, "writing");
     t0 = Clock::now();
     write_ply(out / frame_file(opt, f.number, ".ply"), output_mesh(tracker));
