@@ -75,7 +75,6 @@ TEST(Tracker, FollowsATranslationCoherently) {
   EXPECT_TRUE(tracker.events().empty());
   for (std::size_t f = 1; f < frames.size(); ++f) {
     const FrameReport& r = tracker.add_frame(frames[f]);
-    std::printf("frame %zu: V %zu split %zu sub %zu col %zu pc %zu pd %zu cells %zu/%zu  coarse %.3f fine %.3f imp %.3f sdf %.3f topo %.3f\n", f, r.vertices, r.events_by_kind[0], r.events_by_kind[1], r.events_by_kind[2], r.events_by_kind[3], r.events_by_kind[4], r.complex_cells_self, r.complex_cells_target, r.seconds.coarse, r.seconds.fine, r.seconds.improve, r.seconds.signed_distance, r.seconds.topology);
     EXPECT_EQ(r.components, 1u);
     EXPECT_EQ(r.euler, 2);
     EXPECT_NO_THROW(tracker.mesh().validate(true));
