@@ -1,4 +1,5 @@
 #include "tools/cli_common.hpp"
+#include <algorithm>
 
 #include "io/error.hpp"
 #include "io/mesh_reader.hpp"
@@ -48,6 +49,12 @@ void ensure_directory(const fs::path& dir) {
   std::error_code ec;
   fs::create_directories(dir, ec);
   if (ec || !fs::is_directory(dir)) TT_THROW(IoError, dir.string() << ": cannot create folder: " << ec.message());
+}
+
+double median(std::vector<double> v) {
+  if (v.empty()) return 0;
+  std::sort(v.begin(), v.end());
+  return v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]);
 }
 
 }  // namespace topotrack::cli

@@ -30,4 +30,7 @@ SurfaceMesh load_surface_mesh(const std::filesystem::path& path, bool require_cl
 //! Create the output folder (and parents). \throw IoError naming it.
 void ensure_directory(const std::filesystem::path& dir);
 
+//! Median of the values (0 for none): what every per-frame summary of the CLI reports.
+double median(std::vector<double> values);
+
 }  // namespace topotrack::cli

@@ -35,12 +35,6 @@ struct BenchOptions {
   std::string profile = "default";
 };
 
-double median(std::vector<double> v) {
-  if (v.empty()) return 0;
-  std::sort(v.begin(), v.end());
-  return v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]);
-}
-
 //! Track the frames of `dir` and summarise: medians over the frames after the first (the first frame is only
 //! an improvement, not a tracking step).
 json run_sequence(const std::string& name, const fs::path& dir, const TrackerParams& params) {
@@ -84,17 +78,10 @@ void run_bench(const BenchOptions& opt) {
     g.kind = "blobs";
     g.frames = 100;  // one full turn in 100 frames, the tracker's standard step; the first `frames` are tracked
     g.resolution = res;
+    g.last_frame = opt.frames;
     const fs::path dir = out / ("blobs_r" + std::to_string(res));
     fs::remove_all(dir);
-    // Generate only what is tracked: blobs frame k is independent of the total but for the step.
-    GenParams part = g;
-    part.frames = 100;
-    generate_sequence(part, dir);
-    for (int k = opt.frames + 1; k <= 100; ++k) {
-      char name[32];
-      std::snprintf(name, sizeof name, "blobs.%04d.ply", k);
-      fs::remove(dir / name);
-    }
+    generate_sequence(g, dir);
     rows.push_back(run_sequence("blobs r" + std::to_string(res), dir, params));
   }
   for (const auto& c : opt.captures) {

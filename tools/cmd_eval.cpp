@@ -26,11 +26,17 @@
 
 namespace topotrack::cli {
 namespace {
+
+std::string format(const char* f, double v) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, f, v);
+  return buf;
+}
 namespace fs = std::filesystem;
 using json = nlohmann::json;
 
 struct EvalOptions {
-  std::string out, input, ground_truth, json_out, plots;
+  std::string out, input, ground_truth, json_out, plots, markdown;
   bool quiet = false;
 };
 
@@ -233,6 +239,19 @@ void run_eval(const EvalOptions& opt) {
     frames.push_back(fj);
   }
 
+  // The tracker's own record, when OUT was written by `topotrack track`: seconds per frame.
+  json track;
+  const fs::path track_json = fs::path(opt.out) / "track.json";
+  if (fs::exists(track_json)) {
+    const MappedFile f(track_json);
+    track = json::parse(f.text(), nullptr, /*allow_exceptions=*/false);
+    if (!track.is_object() || !track.contains("frames") || !track["frames"].is_array()) track = json();
+  }
+  std::vector<double> frame_seconds;
+  if (!track.is_null())
+    for (const auto& fr : track["frames"])
+      if (fr.value("index", 0) > 0 && fr.contains("seconds")) frame_seconds.push_back(fr["seconds"].value("total", 0.0));
+
   const std::size_t n = out.frames.size();
   json summary = {{"frames", n},
                   {"worst_mean_distance", worst_mean},
@@ -241,6 +260,7 @@ void run_eval(const EvalOptions& opt) {
                   {"closed_manifold", closed_ok},
                   {"mean_new_vertex_share", n > 1 ? sum_new_share / double(n - 1) : 0.0}};
   if (!last_drift.is_null()) summary["final_drift"] = last_drift;
+  if (!frame_seconds.empty()) summary["median_seconds_per_frame"] = median(frame_seconds);
   const json result = {{"output", opt.out}, {"input", opt.input}, {"ground_truth", opt.ground_truth},
                        {"summary", summary}, {"frames", frames}};
   if (!opt.json_out.empty()) write_file_atomic(opt.json_out, result.dump(1) + "\n");
@@ -254,22 +274,17 @@ void run_eval(const EvalOptions& opt) {
     if (!last_drift.is_null())
       write_plot(opt.plots, "drift.png", {{"mean drift", xs, drift_mean}},
                  {800, 420, "drift against ground truth", "frame", "% of bbox diagonal"});
-    const fs::path track_json = fs::path(opt.out) / "track.json";
-    if (fs::exists(track_json)) {
-      const MappedFile f(track_json);
-      const json tj = json::parse(f.text(), nullptr, /*allow_exceptions=*/false);
-      if (tj.is_object() && tj.contains("frames")) {
-        std::vector<PlotSeries> stages;
-        for (const char* s : {"coarse", "fine", "improve", "signed_distance", "topology", "io"}) {
-          PlotSeries ps{s, {}, {}};
-          for (const auto& fr : tj["frames"]) {
-            ps.x.push_back(fr.value("frame", 0.0));
-            ps.y.push_back(fr["seconds"].value(s, 0.0));
-          }
-          stages.push_back(ps);
+    if (!track.is_null()) {
+      std::vector<PlotSeries> stages;
+      for (const char* st : {"coarse", "fine", "improve", "signed_distance", "topology", "io"}) {
+        PlotSeries ps{st, {}, {}};
+        for (const auto& fr : track["frames"]) {
+          ps.x.push_back(fr.value("frame", 0.0));
+          ps.y.push_back(fr["seconds"].value(st, 0.0));
         }
-        write_plot(opt.plots, "seconds.png", stages, {800, 420, "seconds per stage", "frame", "seconds"});
+        stages.push_back(ps);
       }
+      write_plot(opt.plots, "seconds.png", stages, {800, 420, "seconds per stage", "frame", "seconds"});
     }
   }
   if (!opt.quiet) {
@@ -281,6 +296,17 @@ void run_eval(const EvalOptions& opt) {
     std::printf("\n");
   }
   if (opt.json_out.empty() && opt.quiet) std::cout << result.dump(1) << "\n";
+  if (!opt.markdown.empty()) {
+    // A Markdown table (header and one row) for result tables such as docs/results.md; scripts that compare
+    // several runs keep the header of the first.
+    std::printf("| run | frames | mean distance | Hausdorff | topology = input | closed, non-degenerate | new vertices "
+                "/frame | final drift (mean) | s/frame |\n| --- | --- | --- | --- | --- | --- | --- | --- | --- |\n");
+    std::printf("| %s | %zu | %.4f%% | %.3f%% | %zu/%zu | %zu/%zu | %.2f%% | %s | %s |\n", opt.markdown.c_str(), n,
+                100 * worst_mean, 100 * worst_hausdorff, topo_ok, n, closed_ok, n,
+                100 * summary["mean_new_vertex_share"].get<double>(),
+                last_drift.is_null() ? "n/a" : format("%.4f%%", 100 * last_drift["mean"].get<double>()).c_str(),
+                frame_seconds.empty() ? "n/a" : format("%.2f", median(frame_seconds)).c_str());
+  }
 }
 
 void add_eval_command(CLI::App& app) {
@@ -292,6 +318,7 @@ void add_eval_command(CLI::App& app) {
                   "ground_truth.json of `gen blobs`, or the coherent frames of `gen resurface`");
   sub->add_option("-o,--json", opt->json_out, "write the per-frame results as JSON");
   sub->add_option("--plots", opt->plots, "write PNG plots (distance, resampling, drift, seconds) into this folder");
+  sub->add_option("--markdown", opt->markdown, "also print a Markdown table row for this run, labelled LABEL");
   sub->add_flag("--quiet", opt->quiet, "no summary line (prints the JSON when -o is not given)");
   sub->callback([opt] { run_eval(*opt); });
 }

@@ -56,6 +56,9 @@ void add_gen_command(CLI::App& app) {
   sub->add_option("-o,--output", opt->out, "output folder")->required();
   sub->add_option("--frames", opt->params.frames, "number of frames (default 60; resurface: all source frames)")
       ->check(CLI::NonNegativeNumber);
+  sub->add_option("--last", opt->params.last_frame,
+                  "synthetic kinds: write only frames 1..N of the --frames sequence (default: all)")
+      ->check(CLI::NonNegativeNumber);
   sub->add_option("--resolution", opt->params.resolution,
                   "voxels across the bounding box (default: ~10-20k vertices; resurface 128)")
       ->check(CLI::Range(0, 4096));

@@ -74,7 +74,9 @@ GenReport generate_synthetic(const GenParams& params, const fs::path& dir, nlohm
   report.resolution = scene.resolution();
   report.voxel_size = scene.voxel_size();
   const std::string prefix = params.kind + ".";
-  for (int n = 1; n <= scene.frames(); ++n) {
+  if (params.last_frame < 0) TT_THROW(InvalidInput, params.kind << ": last frame must be >= 0, got " << params.last_frame);
+  const int last = params.last_frame > 0 ? std::min(params.last_frame, scene.frames()) : scene.frames();
+  for (int n = 1; n <= last; ++n) {
     const auto t0 = Clock::now();
     GenFrameReport r;
     r.frame = n;
@@ -84,7 +86,7 @@ GenReport generate_synthetic(const GenParams& params, const fs::path& dir, nlohm
     write_ply(dir / r.file, mesh);
     r.seconds = std::chrono::duration<double>(Clock::now() - t0).count();
     report.frames.push_back(r);
-    if (params.progress) params.progress(r, scene.frames());
+    if (params.progress) params.progress(r, last);
   }
   const std::string truth = scene.ground_truth().dump(1);
   write_file_atomic(dir / "ground_truth.json", truth);

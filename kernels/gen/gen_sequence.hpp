@@ -27,6 +27,10 @@ struct GenParams {
   //! 0: the kind's default (synthetic: ~10k-20k vertices; resurface: 128).
   int resolution = 0;
   unsigned seed = 1;
+  //! Synthetic kinds: write only frames 1..last_frame of the `frames`-frame sequence (0: all). The motion per
+  //! frame depends on `frames` (blobs: one turn over the sequence), so this gives the first steps of a long
+  //! sequence without generating the rest (the Table 1 harness tracks a few frames at high resolution).
+  int last_frame = 0;
   std::string source;  //!< resurface: the coherent sequence (folder, glob or frame pattern)
   long start = -1;     //!< resurface: first source frame number used (-1: the first frame)
   int every = 1;       //!< resurface: use every n-th source frame
