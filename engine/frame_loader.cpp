@@ -2,13 +2,167 @@
 
 #include <openvdb/io/File.h>
 
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <sstream>
+
 #include "io/error.hpp"
 #include "io/mesh_reader.hpp"
 #include "kernels/mesh/mesh_convert.hpp"
 #include "kernels/mesh/mesh_queries.hpp"
+#include "kernels/sdf/marching_cubes.hpp"
 #include "kernels/sdf/signed_distance.hpp"
 
 namespace topotrack {
+namespace {
+
+using DirectedEdge = std::pair<std::int64_t, std::int64_t>;
+
+//! Every triangle's three directed edges, sorted (for binary search of the reverse edge).
+std::vector<DirectedEdge> directed_edges(const MeshData& data) {
+  std::vector<DirectedEdge> e;
+  e.reserve(3 * data.triangles.size());
+  for (const auto& t : data.triangles)
+    for (int k = 0; k < 3; ++k) e.emplace_back(t[k], t[(k + 1) % 3]);
+  std::sort(e.begin(), e.end());
+  return e;
+}
+
+bool contains(const std::vector<DirectedEdge>& sorted, const DirectedEdge& e) {
+  return std::binary_search(sorted.begin(), sorted.end(), e);
+}
+
+Vec3 position(const MeshData& data, std::int64_t i) {
+  const auto& p = data.positions[std::size_t(i)];
+  return {p[0], p[1], p[2]};
+}
+
+//! Bounding-box diagonal of a loop's vertices: the size of the hole.
+double loop_extent(const MeshData& data, const std::vector<std::int64_t>& loop) {
+  Vec3 lo = position(data, loop.front()), hi = lo;
+  for (auto i : loop) {
+    lo = lo.cwiseMin(position(data, i));
+    hi = hi.cwiseMax(position(data, i));
+  }
+  return (hi - lo).norm();
+}
+
+std::string holes_summary(const MeshData& data, const std::vector<std::vector<std::int64_t>>& loops) {
+  std::size_t edges = 0, largest = 0;
+  double extent = 0;
+  for (std::size_t l = 0; l < loops.size(); ++l) {
+    edges += loops[l].size();
+    const double x = loop_extent(data, loops[l]);
+    if (x > extent) {
+      extent = x;
+      largest = l;
+    }
+  }
+  std::ostringstream os;
+  os << edges << " boundary edges in " << loops.size() << (loops.size() == 1 ? " hole" : " holes")
+     << " (largest: " << loops[largest].size() << " edges, " << extent << " across)";
+  return os.str();
+}
+
+}  // namespace
+
+double soup_mean_edge_length(const MeshData& data) {
+  const auto edges = directed_edges(data);
+  double sum = 0;
+  std::size_t n = 0;
+  for (const auto& [a, b] : edges) {
+    if (a > b && contains(edges, {b, a})) continue;  // an interior edge counts once
+    sum += (position(data, a) - position(data, b)).norm();
+    ++n;
+  }
+  return n ? sum / double(n) : 0.0;
+}
+
+std::vector<std::vector<std::int64_t>> boundary_loops(const MeshData& data) {
+  const auto edges = directed_edges(data);
+  std::vector<DirectedEdge> boundary;  // sorted, as `edges`
+  for (const auto& [a, b] : edges)
+    if (!contains(edges, {b, a})) boundary.emplace_back(a, b);
+  std::vector<char> used(boundary.size(), 0);
+  std::vector<std::vector<std::int64_t>> loops;
+  for (std::size_t s = 0; s < boundary.size(); ++s) {
+    if (used[s]) continue;
+    std::vector<std::int64_t> loop;
+    std::size_t e = s;
+    for (;;) {
+      used[e] = 1;
+      loop.push_back(boundary[e].first);
+      // Continue with the first unused boundary edge leaving the end vertex (the walk ends at the start
+      // vertex or, on a pinched or inconsistently oriented boundary, where no unused edge leaves).
+      const auto to = boundary[e].second;
+      auto it = std::lower_bound(boundary.begin(), boundary.end(), DirectedEdge(to, std::numeric_limits<std::int64_t>::min()));
+      while (it != boundary.end() && it->first == to && used[std::size_t(it - boundary.begin())]) ++it;
+      if (it == boundary.end() || it->first != to) break;
+      e = std::size_t(it - boundary.begin());
+    }
+    loops.push_back(std::move(loop));
+  }
+  return loops;
+}
+
+SurfaceMesh close_holes(const MeshData& data, const FrameLoadParams& params, const std::string& name,
+                        FrameLoadReport* report) {
+  if (data.triangles.empty()) TT_THROW(InvalidInput, name << ": no triangles");
+  const double h = params.voxel_size > 0 ? params.voxel_size : soup_mean_edge_length(data);
+  if (!(h > 0) || !std::isfinite(h)) TT_THROW(InvalidInput, name << ": no edge length to close holes at");
+  const auto loops = boundary_loops(data);
+
+  std::vector<Vec3> positions;
+  positions.reserve(data.positions.size() + loops.size());
+  for (std::size_t i = 0; i < data.positions.size(); ++i) positions.push_back(position(data, std::int64_t(i)));
+  std::vector<std::array<Index, 3>> triangles;
+  triangles.reserve(data.triangles.size());
+  for (const auto& t : data.triangles) triangles.push_back({Index(t[0]), Index(t[1]), Index(t[2])});
+
+  FrameLoadReport rep;
+  rep.voxel_size = h;
+  for (const auto& loop : loops) {
+    const double extent = loop_extent(data, loop);
+    if (extent > params.max_hole_voxels * h)
+      TT_THROW(InvalidInput, name << ": a hole of " << loop.size() << " boundary edges is " << extent
+                                  << " across, larger than --close-holes closes (" << params.max_hole_voxels
+                                  << " voxels of " << h << "); " << holes_summary(data, loops));
+    // The cap: a fan around the loop's centroid, each triangle taking its boundary edge a->b reversed.
+    Vec3 c = Vec3::Zero();
+    for (auto i : loop) c += position(data, i);
+    const Index centre = Index(positions.size());
+    positions.push_back(c / double(loop.size()));
+    for (std::size_t k = 0; k < loop.size(); ++k)
+      triangles.push_back({Index(loop[(k + 1) % loop.size()]), Index(loop[k]), centre});
+    rep.hole_boundary_edges += loop.size();
+    rep.largest_hole = std::max(rep.largest_hole, extent);
+  }
+  rep.holes_closed = loops.size();
+
+  // Through the level set (§4.3's CalculateSignedDistance and marching cubes): a closed 2-manifold.
+  MeshData closed;
+  try {
+    closed = marching_cubes(*signed_distance(positions, triangles, h));
+  } catch (const InvalidInput& e) {
+    TT_THROW(InvalidInput, name << ": closing holes: " << e.what());
+  }
+  if (closed.triangles.empty())
+    TT_THROW(InvalidInput, name << ": closing the holes left no surface at voxel size " << h
+                                << " (the surface is thinner than a voxel)");
+  SurfaceMesh mesh = to_surface_mesh(closed);
+  mesh.validate(/*require_closed=*/true);
+  if (rep.holes_closed > 0) {
+    std::ostringstream os;
+    os << "closed " << rep.holes_closed << (rep.holes_closed == 1 ? " hole" : " holes") << " ("
+       << rep.hole_boundary_edges << " boundary edges, largest " << rep.largest_hole
+       << " across) through the level set at voxel size " << h << ": " << data.positions.size() << " -> "
+       << mesh.n_vertices() << " vertices";
+    rep.warnings.push_back(os.str());
+  }
+  if (report) *report = std::move(rep);
+  return mesh;
+}
 
 openvdb::FloatGrid::Ptr read_level_set(const std::filesystem::path& path) {
   ensure_openvdb_initialized();
@@ -35,7 +189,7 @@ openvdb::FloatGrid::Ptr read_level_set(const std::filesystem::path& path) {
   return first;
 }
 
-LoadedFrame load_frame(const std::filesystem::path& path) {
+LoadedFrame load_frame(const std::filesystem::path& path, const FrameLoadParams& params) {
   LoadedFrame out;
   if (path.extension() == ".vdb") {
     out.grid = read_level_set(path);
@@ -43,12 +197,23 @@ LoadedFrame load_frame(const std::filesystem::path& path) {
   }
   const MeshData data = read_mesh(path);
   if (data.triangles.empty()) TT_THROW(InvalidInput, path.string() << ": no triangles");
+  const auto loops = boundary_loops(data);
+  if (!loops.empty()) {
+    if (params.close_holes) {
+      out.mesh = close_holes(data, params, path.string(), &out.report);
+      return out;
+    }
+    TT_THROW(InvalidInput, path.string() << ": the surface is open: " << holes_summary(data, loops)
+                                         << "; the tracker needs closed 2-manifold surfaces (--close-holes closes "
+                                            "holes up to "
+                                         << params.max_hole_voxels << " voxels across; see docs/robustness.md)");
+  }
   try {
     out.mesh = to_surface_mesh(data);
     out.mesh.validate(/*require_closed=*/true);
   } catch (const Error& e) {
     TT_THROW(InvalidInput, path.string() << ": " << e.what()
-                                         << " (the tracker needs closed 2-manifold surfaces; see docs/)");
+                                         << " (the tracker needs closed 2-manifold surfaces; see docs/robustness.md)");
   }
   return out;
 }

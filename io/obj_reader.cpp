@@ -101,7 +101,7 @@ private:
     const auto defined = static_cast<std::int64_t>(mesh_.positions.size());
     if (i == 0) fail(line, "face corner '" + token_at(start, end) + "' has vertex index 0 (OBJ is 1-based)");
     if (i < 0) {
-      if (-i > defined)
+      if (i < -defined)  // not -i > defined: -i overflows for INT64_MIN
         fail(line, "relative index " + std::to_string(i) + " before the first vertex (" +
                        std::to_string(defined) + " defined)");
       return defined + i;

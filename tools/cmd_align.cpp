@@ -2,6 +2,8 @@
 // (coarse deformation graph, then fine per-vertex), or by one stage alone, or by the naive
 // closest-point projection of the paper's Fig. 9. OUT keeps SOURCE's vertices, order and ids.
 #include <cstdio>
+#include <initializer_list>
+#include <utility>
 #include <iostream>
 #include <nlohmann/json.hpp>
 
@@ -43,6 +45,51 @@ TargetSurface load_target(const std::string& path) {
   }
 }
 
+// A stage's report as JSON: its figures plus "seconds" per phase.
+nlohmann::json stage_json(nlohmann::json figures, std::initializer_list<std::pair<const char*, double>> seconds) {
+  for (const auto& [phase, value] : seconds) figures["seconds"][phase] = value;
+  return figures;
+}
+
+nlohmann::json run_coarse(SurfaceMesh& mesh, const TargetSurface& target, const AlignOptions& opt) {
+  CoarseParams p;
+  p.graph_density = opt.graph_density;
+  const CoarseReport r = align_coarse(mesh, target, p);
+  return stage_json({{"nodes", r.nodes},
+                     {"graph_edges", r.graph_edges},
+                     {"iterations", r.iterations},
+                     {"levels", r.levels},
+                     {"pcg_iterations", r.pcg_iterations},
+                     {"alpha_reg_end", r.alpha_reg_end},
+                     {"correspondences", r.correspondences},
+                     {"pruned", {{"no_hit", r.pruned_no_hit}, {"normal", r.pruned_normal}, {"distance", r.pruned_distance}}},
+                     {"mean_fit_distance", r.mean_fit_distance},
+                     {"energy_start", r.energy_start},
+                     {"energy_end", r.energy_end}},
+                    {{"graph", r.seconds_graph},
+                     {"correspondences", r.seconds_correspondences},
+                     {"assembly", r.seconds_assembly},
+                     {"factorisation", r.seconds_factorisation},
+                     {"solve", r.seconds_solve},
+                     {"total", r.seconds_total}});
+}
+
+nlohmann::json run_fine(SurfaceMesh& mesh, const TargetSurface& target, const AlignOptions& opt) {
+  FineParams p;
+  p.sigma = opt.sigma;
+  const FineReport r = align_fine(mesh, target, p);
+  return stage_json({{"cg_iterations", r.cg_iterations},
+                     {"correspondences", r.correspondences},
+                     {"pruned", r.pruned},
+                     {"residual", r.residual},
+                     {"energy_start", r.energy_start},
+                     {"energy_end", r.energy_end}},
+                    {{"raycast", r.seconds_raycast},
+                     {"assembly", r.seconds_assembly},
+                     {"solve", r.seconds_solve},
+                     {"total", r.seconds_total}});
+}
+
 void run_align(const AlignOptions& opt) {
   if (int(opt.coarse_only) + int(opt.fine_only) + int(opt.projection_only) > 1)
     TT_THROW(UsageError, "align: --coarse-only, --fine-only and --projection-only exclude each other");
@@ -58,40 +105,8 @@ void run_align(const AlignOptions& opt) {
     j["mode"] = "projection";
   } else {
     j["mode"] = opt.coarse_only ? "coarse" : opt.fine_only ? "fine" : "coarse+fine";
-    if (!opt.fine_only) {
-      CoarseParams p;
-      p.graph_density = opt.graph_density;
-      const CoarseReport r = align_coarse(mesh, target, p);
-      j["coarse"] = {{"nodes", r.nodes},
-                     {"graph_edges", r.graph_edges},
-                     {"iterations", r.iterations},
-                     {"alpha_reg_end", r.alpha_reg_end},
-                     {"correspondences", r.correspondences},
-                     {"pruned", {{"no_hit", r.pruned_no_hit}, {"normal", r.pruned_normal}, {"distance", r.pruned_distance}}},
-                     {"energy_start", r.energy_start},
-                     {"energy_end", r.energy_end},
-                     {"seconds", {{"graph", r.seconds_graph},
-                                  {"correspondences", r.seconds_correspondences},
-                                  {"assembly", r.seconds_assembly},
-                                  {"factorisation", r.seconds_factorisation},
-                                  {"solve", r.seconds_solve},
-                                  {"total", r.seconds_total}}}};
-    }
-    if (!opt.coarse_only) {
-      FineParams p;
-      p.sigma = opt.sigma;
-      const FineReport r = align_fine(mesh, target, p);
-      j["fine"] = {{"cg_iterations", r.cg_iterations},
-                   {"correspondences", r.correspondences},
-                   {"pruned", r.pruned},
-                   {"residual", r.residual},
-                   {"energy_start", r.energy_start},
-                   {"energy_end", r.energy_end},
-                   {"seconds", {{"raycast", r.seconds_raycast},
-                                {"assembly", r.seconds_assembly},
-                                {"solve", r.seconds_solve},
-                                {"total", r.seconds_total}}}};
-    }
+    if (!opt.fine_only) j["coarse"] = run_coarse(mesh, target, opt);
+    if (!opt.coarse_only) j["fine"] = run_fine(mesh, target, opt);
   }
   const std::filesystem::path out(opt.output);
   if (out.has_parent_path()) ensure_directory(out.parent_path());

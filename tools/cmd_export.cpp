@@ -7,11 +7,10 @@
 
 #include "io/atomic_file.hpp"
 #include "io/error.hpp"
-#include "io/mesh_reader.hpp"
 #include "io/obj_writer.hpp"
 #include "io/ply_writer.hpp"
-#include "kernels/render/frame_geometry.hpp"
-#include "kernels/render/pc2.hpp"
+#include "kernels/propagate/frame_geometry.hpp"
+#include "io/pc2.hpp"
 #include "tools/cli_common.hpp"
 #include "tools/commands.hpp"
 
@@ -26,18 +25,6 @@ struct ExportOptions {
   double fps_scale = 1;
   bool quiet = false;
 };
-
-FrameGeometry load_geometry(const fs::path& path, MeshData* data_out = nullptr) {
-  MeshData data = read_mesh(path);
-  FrameGeometry g;
-  try {
-    g = frame_geometry(data);
-  } catch (const InvalidInput& e) {
-    TT_THROW(InvalidInput, path.string() << ": " << e.what());
-  }
-  if (data_out) *data_out = std::move(data);
-  return g;
-}
 
 std::string sequence_name(const fs::path& first) {
   std::string s = first.stem().string();
@@ -64,7 +51,7 @@ void run_export(const ExportOptions& opt) {
   std::vector<Stretch> stretches;
   FrameGeometry prev;
   for (std::size_t k = 0; k < frames.size(); ++k) {
-    FrameGeometry g = load_geometry(frames[k].path);
+    FrameGeometry g = load_frame(frames[k].path, false).geometry;
     if (g.positions.empty()) TT_THROW(InvalidInput, frames[k].path.string() << ": no vertices");
     const bool same = k > 0 && g.positions.size() == prev.positions.size() &&
                       match_connectivity(prev.ids, prev.triangles, g.ids, g.triangles).has_value();
@@ -79,8 +66,9 @@ void run_export(const ExportOptions& opt) {
   const std::string name = sequence_name(frames[0].path);
   nlohmann::json list = nlohmann::json::array();
   for (const Stretch& s : stretches) {
-    MeshData base_data;
-    const FrameGeometry base = load_geometry(frames[s.begin].path, &base_data);
+    const LoadedFrame base_frame = load_frame(frames[s.begin].path, false);
+    const MeshData& base_data = base_frame.data;
+    const FrameGeometry& base = base_frame.geometry;
     const long first = frames[s.begin].number >= 0 ? frames[s.begin].number : long(s.begin);
     const long last = frames[s.end - 1].number >= 0 ? frames[s.end - 1].number : long(s.end - 1);
     char stem[256];
@@ -100,14 +88,14 @@ void run_export(const ExportOptions& opt) {
     h.sample_rate = float(opt.fps_scale);
     h.samples = std::int32_t(s.end - s.begin);
     Pc2Writer writer(cache_path, h);
-    std::vector<Vec3> sample(base.positions.size());
-    writer.add_sample(base.positions);
+    std::vector<std::array<double, 3>> sample(base.positions.size());
+    writer.add_sample(base_data.positions);
     for (std::size_t k = s.begin + 1; k < s.end; ++k) {
-      const FrameGeometry g = load_geometry(frames[k].path);
-      const auto map = match_connectivity(base.ids, base.triangles, g.ids, g.triangles);
+      const LoadedFrame f = load_frame(frames[k].path, false);
+      const auto map = match_connectivity(base.ids, base.triangles, f.geometry.ids, f.geometry.triangles);
       if (!map) TT_THROW(InvalidInput, frames[k].path.string() << ": connectivity changed while exporting (file "
                                                                   "rewritten?)");
-      for (std::size_t i = 0; i < sample.size(); ++i) sample[i] = g.positions[(*map)[i]];
+      for (std::size_t i = 0; i < sample.size(); ++i) sample[i] = f.data.positions[(*map)[i]];
       writer.add_sample(sample);
     }
     writer.commit();

@@ -9,10 +9,11 @@
 #include "io/mesh_reader.hpp"
 #include "io/ply_writer.hpp"
 #include "kernels/mesh/mesh_queries.hpp"
-#include "kernels/render/frame_geometry.hpp"
-#include "kernels/render/patterns.hpp"
+#include "kernels/propagate/frame_geometry.hpp"
+#include "kernels/propagate/image_projection.hpp"
+#include "kernels/propagate/patterns.hpp"
+#include "kernels/propagate/tracked_sequence.hpp"
 #include "kernels/render/png.hpp"
-#include "kernels/render/tracked_sequence.hpp"
 #include "kernels/wave/laplacian.hpp"
 #include "tools/cli_common.hpp"
 #include "tools/commands.hpp"
@@ -32,6 +33,7 @@ struct PropagateOptions {
   std::string name;
   std::string fallback;
   double displace = 0;
+  bool round_trip = false;
   bool quiet = false;
 };
 
@@ -141,27 +143,25 @@ IdField evaluate_source(const SourceSpec& spec, const MeshData& data, const Fram
   return field;
 }
 
-struct LoadedFrame {
-  MeshData data;
-  FrameGeometry geometry;
-};
-
-LoadedFrame load_frame(const TrackedFrame& f) {
-  LoadedFrame l;
-  l.data = read_mesh(f.mesh);
-  try {
-    l.geometry = frame_geometry(l.data);
-  } catch (const InvalidInput& e) {
-    TT_THROW(InvalidInput, f.mesh.string() << ": " << e.what());
-  }
-  if (l.geometry.ids.empty())
-    TT_THROW(InvalidInput, f.mesh.string() << ": no vertex ids (`id` property): not a tracked frame (topotrack track)");
-  return l;
+//! --round-trip: the source carried forward to the last frame and back, compared with itself (§4.6); no files.
+void run_round_trip(const std::vector<TrackedFrame>& frames, std::size_t source, const IdField& start) {
+  const RoundTripReport r =
+      round_trip(frames.size(), source, start, [&](std::size_t k) { return load_frame_events(frames, k); });
+  const double range = r.range > 0 ? r.range : 1.0;
+  std::printf("round trip frame %ld -> %ld -> %ld: %zu values (width %d), range %.6g; |error| max %.6g (%.3f%% of the "
+              "range), mean %.6g (%.4f%%), rms %.6g (%.4f%%); %zu ids lost; %.3f s forward, %.3f s backward\n",
+              frames[source].number, frames.back().number, frames[source].number, r.values, start.width, r.range,
+              r.max_abs, 100 * r.max_abs / range, r.mean_abs, 100 * r.mean_abs / range, r.rms, 100 * r.rms / range,
+              r.missing, r.forward_seconds, r.backward_seconds);
 }
 
 void run_propagate(const PropagateOptions& opt) {
   const auto t_start = std::chrono::steady_clock::now();
-  if (opt.out.empty() == !opt.in_place) TT_THROW(UsageError, "give exactly one of -o OUT and --in-place");
+  if (opt.round_trip && (!opt.out.empty() || opt.in_place || !opt.morph_source.empty() || opt.displace != 0 ||
+                         opt.direction != "forward"))
+    TT_THROW(UsageError, "--round-trip writes nothing: no -o, --in-place, --morph-source, --displace or --direction");
+  if (!opt.round_trip && opt.out.empty() == !opt.in_place)
+    TT_THROW(UsageError, "give exactly one of -o OUT and --in-place");
   if (opt.direction != "forward" && opt.direction != "backward" && opt.direction != "both")
     TT_THROW(UsageError, "--direction must be forward, backward or both");
   std::vector<std::string> warnings;
@@ -186,12 +186,15 @@ void run_propagate(const PropagateOptions& opt) {
       if (frames[k].number == opt.from) source = k;
     if (source == count) TT_THROW(UsageError, "--from " << opt.from << ": no frame with that number");
   }
+  const SourceSpec spec = parse_spec(opt.source);
+  const LoadedFrame src = load_frame(frames[source].mesh, true);
+  const IdField start = evaluate_source(spec, src.data, src.geometry, frames[source].mesh);
+  if (opt.round_trip) {
+    run_round_trip(frames, source, start);
+    return;
+  }
   const fs::path out_dir = opt.in_place ? fs::path() : fs::path(opt.out);
   if (!opt.in_place) ensure_directory(out_dir);
-
-  const SourceSpec spec = parse_spec(opt.source);
-  const LoadedFrame src = load_frame(frames[source]);
-  const IdField start = evaluate_source(spec, src.data, src.geometry, frames[source].mesh);
   const int width = start.width;
   if (opt.displace != 0 && width != 1) TT_THROW(UsageError, "--displace needs a field of width 1, the source has " << width);
   const std::string name = !opt.name.empty() ? opt.name : width == 3 || width == 4 ? "color" : "value";
@@ -201,21 +204,21 @@ void run_propagate(const PropagateOptions& opt) {
   // Morph (§5): the second source on the last frame, propagated backward to every frame and kept in memory.
   std::vector<std::vector<float>> morph_values;
   if (morph) {
-    const LoadedFrame last = load_frame(frames[count - 1]);
+    const LoadedFrame last = load_frame(frames[count - 1].mesh, true);
     const IdField end = evaluate_source(parse_spec(opt.morph_source), last.data, last.geometry, frames[count - 1].mesh);
     if (end.width != width) TT_THROW(UsageError, "--morph-source has width " << end.width << ", the source " << width);
     morph_values.resize(count);
     propagate_sequence(
         count, count - 1, false, end, [&](std::size_t k) { return load_frame_events(frames, k); },
         [&](std::size_t k, const IdTable& table) {
-          gather_values(table, load_frame(frames[k]).geometry.ids, fallback, morph_values[k]);
+          gather_values(table, load_frame(frames[k].mesh, true).geometry.ids, fallback, morph_values[k]);
         });
   }
 
   std::size_t missing = 0, written = 0;
   SequencePropagateReport total;
   auto emit = [&](std::size_t k, const IdTable& table) {
-    LoadedFrame f = load_frame(frames[k]);
+    LoadedFrame f = load_frame(frames[k].mesh, true);
     std::vector<float> values;
     missing += gather_values(table, f.geometry.ids, fallback, values);
     if (morph) {
@@ -225,8 +228,7 @@ void run_propagate(const PropagateOptions& opt) {
     if (opt.displace != 0) {
       const std::vector<double> h(values.begin(), values.end());
       const std::vector<Vec3> moved = displace_along_normals(f.geometry.positions, f.geometry.triangles, h, opt.displace);
-      for (std::size_t i = 0; i < moved.size(); ++i)
-        f.data.positions[i] = {moved[i].x(), moved[i].y(), moved[i].z()};
+      set_positions(f.data, moved);
     }
     set_attribute(f.data, name, width, std::move(values));
     const fs::path target = opt.in_place ? frames[k].mesh : out_dir / frames[k].mesh.filename().replace_extension(".ply");
@@ -284,6 +286,8 @@ void add_propagate_command(CLI::App& app) {
   sub->add_option("--fallback", opt->fallback, "value for vertices no rule reaches, v or v/v/v (default 0.5)");
   sub->add_option("--displace", opt->displace,
                   "displacement map (§5): move each vertex along its normal by SCALE times the (scalar) value");
+  sub->add_flag("--round-trip", opt->round_trip,
+                "carry the source forward to the last frame and back, print the error against itself (§4.6)");
   sub->add_flag("-q,--quiet", opt->quiet, "no progress line");
   sub->callback([opt] { run_propagate(*opt); });
 }

@@ -11,9 +11,9 @@
 #include "io/error.hpp"
 #include "io/mapped_file.hpp"
 #include "io/mesh_reader.hpp"
-#include "kernels/render/frame_geometry.hpp"
 #include "kernels/render/png.hpp"
 #include "kernels/render/raytracer.hpp"
+#include "kernels/render/render_mesh.hpp"
 #include "tools/cli_common.hpp"
 #include "tools/commands.hpp"
 
@@ -30,7 +30,7 @@ struct RenderOptions {
   double wire_width = 1.0;
   double azimuth = 30, elevation = 20, fov = 30, spin = 0;
   std::string up = "y";
-  std::string color = "color";
+  std::string color;  // empty: "color" when present
   std::string fit = "all";
   int every = 1;
   int sheet = 0, sheet_size = 256, sheet_columns = 0;
@@ -40,6 +40,7 @@ struct RenderOptions {
   std::string follow;
   std::vector<std::string> diff;
   int diff_tolerance = 8;
+  bool compare_ends = false;
   bool quiet = false;
 };
 
@@ -52,10 +53,13 @@ Vec3 parse_up(const std::string& s) {
   TT_THROW(UsageError, "--up must be x, y, z, -y or -z");
 }
 
+//! The frame with the colours of attribute `color`, or of "color" when present if `color` is empty.
 RenderMesh load_render_mesh(const fs::path& path, const std::string& color) {
   const MeshData data = read_mesh(path);
+  if (!color.empty() && !data.attribute(color))
+    TT_THROW(InvalidInput, path.string() << ": no vertex attribute '" << color << "' (--color)");
   try {
-    return to_render_mesh(data, color);
+    return to_render_mesh(data, color.empty() ? "color" : color);
   } catch (const InvalidInput& e) {
     TT_THROW(InvalidInput, path.string() << ": " << e.what());
   }
@@ -103,12 +107,26 @@ BoundingBox bounds_of(const RenderMesh& m) {
   return b;
 }
 
-void run_diff(const RenderOptions& opt) {
-  const Image a = read_png(opt.diff[0]), b = read_png(opt.diff[1]);
-  const ImageDifference d = compare_images(a, b, opt.diff_tolerance);
+//! Per-pixel difference of two pictures, over the whole image and over the pixels showing the surface in either
+//! (the background colour in both left out).
+void print_difference(const std::string& name_a, const Image& a, const std::string& name_b, const Image& b,
+                      int tolerance) {
+  CompareParams params;
+  params.tolerance = tolerance;
+  const ImageDifference all = compare_images(a, b, params);
+  params.ignore = std::array<std::uint8_t, 3>{255, 255, 255};
+  const ImageDifference fg = compare_images(a, b, params);
   std::printf("%s vs %s: mean |diff| %.3f, rms %.3f, max %d (of 255), %.2f%% pixels differ by more than %d\n",
-              opt.diff[0].c_str(), opt.diff[1].c_str(), d.mean_abs, d.rms, d.max_abs, 100 * d.share_differing,
-              opt.diff_tolerance);
+              name_a.c_str(), name_b.c_str(), all.mean_abs, all.rms, all.max_abs, 100 * all.share_differing, tolerance);
+  std::printf("surface pixels (%zu, background left out): pixel difference mean %.2f, 95th percentile %d, max %d; "
+              "%.2f%% differ by more than %d\n",
+              fg.pixels_compared, fg.pixel_mean, fg.pixel_p95, fg.max_abs, 100 * fg.share_differing, tolerance);
+}
+
+void run_diff(const RenderOptions& opt) {
+  const Image a = read_png(opt.diff[0]);
+  const Image b = read_png(opt.diff[1]);
+  print_difference(opt.diff[0], a, opt.diff[1], b, opt.diff_tolerance);
 }
 
 void run_render(const RenderOptions& opt) {
@@ -120,6 +138,11 @@ void run_render(const RenderOptions& opt) {
   if (opt.inputs.empty()) TT_THROW(UsageError, "FRAMES is required");
   if (opt.out.empty()) TT_THROW(UsageError, "-o OUT is required");
   if (opt.every < 1) TT_THROW(UsageError, "--every must be at least 1");
+  if (opt.samples < 1 || opt.samples > 8) TT_THROW(UsageError, "--samples must be in [1, 8]");
+  if (opt.sheet > 0 && (opt.sheet_size < 1 || opt.sheet_size > 16384))
+    TT_THROW(UsageError, "--sheet-size must be in [1, 16384]");
+  if (opt.width < 1 || opt.height < 1 || opt.width > 16384 || opt.height > 16384)
+    TT_THROW(UsageError, "--width and --height must be in [1, 16384]");
   if (opt.fit != "all" && opt.fit != "each") TT_THROW(UsageError, "--fit must be all or each");
   std::vector<std::string> warnings;
   std::vector<InputFrame> frames = resolve_inputs(opt.inputs, &warnings);
@@ -176,18 +199,26 @@ void run_render(const RenderOptions& opt) {
 
   double render_seconds = 0;
   std::size_t images = 0;
+  Image first_image, last_image;
+  if (opt.compare_ends && (opt.no_frames || frames.size() < 2))
+    TT_THROW(UsageError, "--compare-ends needs at least two rendered frames (and no --no-frames)");
   if (!opt.no_frames) {
     for (std::size_t k = 0; k < frames.size(); ++k) {
       RenderMesh mesh = load_render_mesh(frames[k].path, opt.color);
       const Camera cam = camera_for(k, mesh, fit.aspect);
       RenderReport rep;
-      const Image im = render(std::move(mesh), cam, params, &rep);
+      Image im = render(std::move(mesh), cam, params, &rep);
       render_seconds += rep.build_seconds + rep.trace_seconds;
       write_png(out / frames[k].path.filename().replace_extension(".png"), im);
       ++images;
+      if (k == 0) first_image = im;
+      if (k + 1 == frames.size()) last_image = std::move(im);
       if (!opt.quiet) std::fprintf(stderr, "\rrender: %zu/%zu frames", k + 1, frames.size());
     }
     if (!opt.quiet) std::fprintf(stderr, "\n");
+    if (opt.compare_ends)
+      print_difference(frames.front().path.filename().string(), first_image, frames.back().path.filename().string(),
+                       last_image, opt.diff_tolerance);
   }
 
   if (opt.sheet > 0) {
@@ -256,7 +287,7 @@ void add_render_command(CLI::App& app) {
   sub->add_option("--follow", opt->follow,
                   "ground-truth motion file (gen's ground_truth.json): the camera moves rigidly with each frame");
   sub->add_option("--fit", opt->fit, "camera fitted to all frames' bounds or each frame's")->capture_default_str();
-  sub->add_option("--color", opt->color, "vertex attribute with the colours")->capture_default_str();
+  sub->add_option("--color", opt->color, "vertex attribute with the colours (default: `color` when present)");
   sub->add_option("--every", opt->every, "render every n-th frame")->capture_default_str();
   sub->add_flag("--no-frames", opt->no_frames, "no per-frame images (only the sheet / turntable)");
   sub->add_option("--sheet", opt->sheet, "contact sheet of N evenly spaced frames (contact_sheet.png)");
@@ -267,6 +298,8 @@ void add_render_command(CLI::App& app) {
   sub->add_option("--diff", opt->diff, "compare two PNG images per pixel instead of rendering")->expected(2);
   sub->add_option("--diff-tolerance", opt->diff_tolerance, "channel difference counted as differing")
       ->capture_default_str();
+  sub->add_flag("--compare-ends", opt->compare_ends,
+                "compare the first and the last rendered frame per pixel (with --follow: does a texture stick?)");
   sub->add_flag("-q,--quiet", opt->quiet, "no progress line");
   sub->callback([opt] { run_render(*opt); });
 }

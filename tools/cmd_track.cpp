@@ -14,6 +14,7 @@
 #include "io/atomic_file.hpp"
 #include "io/error.hpp"
 #include "io/event_file.hpp"
+#include "io/mesh_reader.hpp"
 #include "io/mapped_file.hpp"
 #include "io/ply_writer.hpp"
 #include "kernels/mesh/mesh_convert.hpp"
@@ -39,6 +40,8 @@ struct TrackOptions {
   double edge_length = -1;
   double graph_density = -1;
   bool no_coarse = false, no_fine = false, no_topology = false, projection_only = false;
+  bool close_holes = false;
+  double max_hole = FrameLoadParams{}.max_hole_voxels;
   std::string name;
 };
 
@@ -120,6 +123,8 @@ void run_track(TrackOptions opt) {
   for (const auto& s : opt.settings) apply_setting(params, s);
   validate(params);
 
+  if (!(opt.max_hole > 0)) TT_THROW(UsageError, "--max-hole must be positive");
+
   std::vector<std::string> warnings;
   std::vector<InputFrame> all = resolve_inputs({opt.input}, &warnings);
   std::vector<InputFrame> frames;
@@ -128,6 +133,15 @@ void run_track(TrackOptions opt) {
   for (std::size_t i = 0; i < frames.size(); ++i)
     if (frames[i].number < 0) frames[i].number = long(i + 1);
   if (opt.name.empty()) opt.name = sequence_name(frames.front().path);
+  if (opt.close_holes && params.edge_length <= 0 && frames.front().path.extension() != ".vdb") {
+    // L from the first frame as read, before any hole is closed (closing resamples it at the voxel size),
+    // so that every frame is closed at the same voxel size, the tracker's (§4.3).
+    params.edge_length = soup_mean_edge_length(read_mesh(frames.front().path));
+    validate(params);
+  }
+  FrameLoadParams load_params;
+  load_params.close_holes = opt.close_holes;
+  load_params.max_hole_voxels = opt.max_hole;
 
   const fs::path out(opt.out);
   ensure_directory(out);
@@ -178,7 +192,10 @@ void run_track(TrackOptions opt) {
     const InputFrame& f = frames[i];
     progress.stage(i, f.number, "reading");
     auto t0 = Clock::now();
-    LoadedFrame frame = load_frame(f.path);
+    load_params.voxel_size =
+        tracker.frames() > 0 ? tracker.voxel_size() : params.voxel_size_factor * params.edge_length;
+    LoadedFrame frame = load_frame(f.path, load_params);
+    for (const auto& w : frame.report.warnings) progress.message("warning: frame " + std::to_string(f.number) + ": " + w);
     double io_seconds = std::chrono::duration<double>(Clock::now() - t0).count();
     progress.stage(i, f.number, "tracking");
     const std::string name = f.path.string();
@@ -192,6 +209,13 @@ void run_track(TrackOptions opt) {
     io_seconds += std::chrono::duration<double>(Clock::now() - t0).count();
     nlohmann::json fj = frame_json(r, f.number, io_seconds);
     fj["input"] = name;
+    if (frame.report.holes_closed > 0) {
+      fj["input_repair"] = {{"holes_closed", frame.report.holes_closed},
+                            {"hole_boundary_edges", frame.report.hole_boundary_edges},
+                            {"largest_hole", frame.report.largest_hole},
+                            {"voxel_size", frame.report.voxel_size}};
+      for (const auto& w : frame.report.warnings) fj["warnings"].push_back(w);
+    }
     report["frames"].push_back(fj);
     report["edge_length"] = tracker.edge_length();
     report["voxel_size"] = tracker.voxel_size();
@@ -226,6 +250,9 @@ void add_track_command(CLI::App& app) {
   sub->add_flag("--no-fine", opt->no_fine, "ablation: skip the fine alignment (§6, Fig. 8)");
   sub->add_flag("--no-topology", opt->no_topology, "ablation: skip the topology constraint (§6)");
   sub->add_flag("--projection-only", opt->projection_only, "ablation: project onto the closest point (Fig. 9)");
+  sub->add_flag("--close-holes", opt->close_holes,
+                "close small holes of open input surfaces through the level set (docs/robustness.md)");
+  sub->add_option("--max-hole", opt->max_hole, "largest hole --close-holes closes, in voxels across (default 8)");
   sub->add_option("--name", opt->name, "output file name prefix (default: from the input)");
   sub->callback([opt] { run_track(*opt); });
 }

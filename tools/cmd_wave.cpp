@@ -1,16 +1,16 @@
 // topotrack wave FRAMES -o OUT: the topology-aware wave simulation of §5 (eq. 1) on a tracked sequence; writes
 // the frames displaced along their normals by the wave height (attribute `height`), events copied, wave.json.
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <iostream>
 #include <nlohmann/json.hpp>
 
 #include "io/atomic_file.hpp"
 #include "io/error.hpp"
-#include "io/mesh_reader.hpp"
 #include "io/ply_writer.hpp"
-#include "kernels/render/frame_geometry.hpp"
-#include "kernels/render/tracked_sequence.hpp"
+#include "kernels/propagate/frame_geometry.hpp"
+#include "kernels/propagate/tracked_sequence.hpp"
 #include "kernels/wave/wave.hpp"
 #include "tools/cli_common.hpp"
 #include "tools/commands.hpp"
@@ -47,6 +47,9 @@ double mean_edge(const FrameGeometry& g) {
 void run_wave(const WaveOptions& opt) {
   const auto t_start = Clock::now();
   if (!(opt.fps > 0)) TT_THROW(UsageError, "--fps must be positive");
+  if (opt.substeps < 0) TT_THROW(UsageError, "--substeps must be >= 0 (0: from the CFL bound)");
+  if (!(opt.damping >= 0 && opt.damping < 1)) TT_THROW(UsageError, "--damping must be in [0, 1)");
+  if (!(opt.speed >= 0) || !std::isfinite(opt.speed)) TT_THROW(UsageError, "--speed must be >= 0 (0: automatic)");
   std::vector<std::string> warnings;
   const auto inputs = resolve_inputs(opt.inputs, &warnings);
   for (const auto& w : warnings) std::cerr << "topotrack: warning: " << w << "\n";
@@ -66,14 +69,9 @@ void run_wave(const WaveOptions& opt) {
   nlohmann::json log = nlohmann::json::array();
   double sim_seconds = 0;
   for (std::size_t k = 0; k < frames.size(); ++k) {
-    MeshData data = read_mesh(frames[k].mesh);
-    FrameGeometry g;
-    try {
-      g = frame_geometry(data);
-    } catch (const InvalidInput& e) {
-      TT_THROW(InvalidInput, frames[k].mesh.string() << ": " << e.what());
-    }
-    if (g.ids.empty()) TT_THROW(InvalidInput, frames[k].mesh.string() << ": no vertex ids: not a tracked frame");
+    LoadedFrame frame = load_frame(frames[k].mesh, true);
+    MeshData& data = frame.data;
+    const FrameGeometry& g = frame.geometry;
     if (k == 0) {
       const double L = mean_edge(g);
       params.speed = opt.speed > 0 ? opt.speed : 2 * L * opt.fps;
@@ -89,7 +87,7 @@ void run_wave(const WaveOptions& opt) {
     integrate_waves(g.positions, g.triangles, state, params, &rep);
     const std::vector<Vec3> moved = displace_along_normals(g.positions, g.triangles, state.h, opt.scale);
     sim_seconds += std::chrono::duration<double>(Clock::now() - t0).count();
-    for (std::size_t i = 0; i < moved.size(); ++i) data.positions[i] = {moved[i].x(), moved[i].y(), moved[i].z()};
+    set_positions(data, moved);
     set_attribute(data, "height", 1, std::vector<float>(state.h.begin(), state.h.end()));
     write_ply(out / frames[k].mesh.filename().replace_extension(".ply"), data);
     if (k > 0 && fs::exists(frames[k].events))

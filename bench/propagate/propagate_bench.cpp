@@ -7,7 +7,7 @@
 #include <algorithm>
 #include <random>
 
-#include "kernels/render/tracked_sequence.hpp"
+#include "kernels/propagate/tracked_sequence.hpp"
 
 namespace topotrack {
 namespace {

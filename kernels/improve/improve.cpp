@@ -7,6 +7,7 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <tuple>
 #include <utility>
 
 #include "kernels/improve/improve_geometry.hpp"
@@ -22,7 +23,7 @@ double since(Clock::time_point t0) { return std::chrono::duration<double>(Clock:
 constexpr double kPi = 3.14159265358979323846;
 constexpr double kDegToRad = kPi / 180.0;
 // A new triangle whose smallest angle is below about 0.06° counts as degenerate whatever the old ones were.
-constexpr double kDegenerateQuality = 1e-3;
+constexpr double kDegenerateQuality = kNearDegenerateSin;
 // A collapse of a short edge may leave edges up to this factor above L_max (the next round splits them):
 // on iso-surface meshes short edges often sit next to nearly maximal ones, and refusing leaves them.
 constexpr double kShortCollapseStretch = 1.25;
@@ -66,6 +67,7 @@ public:
     lmax2_ = lmax_ * lmax_;
     max_dev_ = p_.max_surface_deviation * L;
     q_min_ = std::sin(p_.min_angle_deg * kDegToRad);
+    q_bad_ = std::max(q_min_, kDegenerateQuality);
     q_floor_ = std::sin(kShortCollapseAngleFloor * p_.min_angle_deg * kDegToRad);
     lmax_short2_ = lmax2_ * kShortCollapseStretch * kShortCollapseStretch;
     cos_fold_ = std::cos((180.0 - p_.min_dihedral_deg) * kDegToRad);
@@ -81,7 +83,7 @@ public:
       else
         survey_touched(s);
       rep_.seconds_scan += since(t0);
-      if (s.empty()) break;
+      if (s.empty() && unfixed_.empty()) break;
       if (dev_.empty()) dev_.assign(m_.vertices_size(), 0.0);
       rep_.iterations = it + 1;
       std::size_t ops = 0;
@@ -97,7 +99,13 @@ public:
       t0 = Clock::now();
       ops += fold_pass(s.folds);
       rep_.seconds_folds += since(t0);
-      if (ops == 0) break;
+      if (ops == 0) {
+        // Splits, collapses and flips are at their fixed point: relax around what is still bad.
+        t0 = Clock::now();
+        ops = p_.enable_relaxation ? relax_pass() : 0;
+        rep_.seconds_bad_triangles += since(t0);
+        if (ops == 0) break;
+      }
     }
   }
 
@@ -111,6 +119,16 @@ private:
   double quality(Face f) const {
     const auto t = m_.vertices(f);
     return triangle_quality(pos(t[0]), pos(t[1]), pos(t[2]));
+  }
+  //! A live triangle with an angle below min_angle, or degenerate (is_near_degenerate: a tiny triangle of
+  //! good shape can still vanish when rounded to float; only one with an edge below L_min is that small).
+  bool is_bad(Face f) const {
+    if (m_.is_deleted(f)) return false;
+    const auto t = m_.vertices(f);
+    const Vec3 &p0 = pos(t[0]), &p1 = pos(t[1]), &p2 = pos(t[2]);
+    if (triangle_quality(p0, p1, p2) < q_bad_) return true;
+    const double l2 = std::min({(p1 - p0).squaredNorm(), (p2 - p1).squaredNorm(), (p0 - p2).squaredNorm()});
+    return l2 < lmin2_ && is_near_degenerate(p0, p1, p2);
   }
   //! Normals more than 180° - min_dihedral apart (degenerate faces have no normal and fold nothing).
   bool normals_fold(const Vec3& n0, const Vec3& n1) const {
@@ -126,10 +144,7 @@ private:
   // Survey ---------------------------------------------------------------------------------------
   //! Byte flags only, so a survey of a large mesh touches little fresh memory; keys are recomputed for
   //! the few flagged elements when they are collected.
-  void measure_face(Index i) {
-    const Face f(i);
-    fbad_[i] = !m_.is_deleted(f) && quality(f) < q_min_;
-  }
+  void measure_face(Index i) { fbad_[i] = is_bad(Face(i)); }
   void measure_edge(Index i) {
     const Edge e(i);
     if (m_.is_deleted(e)) {
@@ -259,8 +274,31 @@ private:
   struct RingFace {
     Vertex v, w1, w2;
     Halfedge outer;  // w2 -> w1, in the unchanged face across (w1, w2)
-    Vec3 n_old, n_new;
+    Vec3 n_old, n_new, n_out;  // n_out: of the face across (w1, w2)
   };
+
+  //! The sharpest crease (smallest cosine between the normals of neighbouring faces) and the number of
+  //! folds among the edges in the star of a and b and the edges of its boundary, before a collapse of (a, b).
+  std::pair<double, int> creases_before_collapse(Vertex a, Vertex b) const {
+    double worst = 1;
+    int folds = 0;
+    auto add = [&](const Vec3& n, const Vec3& m) {
+      const double c = normal_cos(n, m);
+      worst = std::min(worst, c);
+      folds += c < cos_fold_;
+    };
+    for (const Vertex v : {a, b}) {
+      const Halfedge g0 = m_.halfedge(v);
+      Halfedge g = g0;
+      do {
+        if (v == a || m_.to_vertex(g) != a)
+          add(area_vector(m_.face(g)), area_vector(m_.face(SurfaceMesh::opposite(g))));
+        g = m_.ccw_rotated(g);
+      } while (g != g0);
+    }
+    for (const RingFace& r : ring_) add(r.n_old, r.n_out);
+    return {worst, folds};
+  }
 
   std::size_t valence(Vertex v) const {
     std::size_t n = 0;
@@ -333,7 +371,8 @@ private:
         const Face f = m_.face(g);
         if (f != f0 && f != f1) {
           const Halfedge gn = m_.next(g);
-          RingFace r{v, m_.to_vertex(g), m_.to_vertex(gn), SurfaceMesh::opposite(gn), {}, {}};
+          RingFace r{v, m_.to_vertex(g), m_.to_vertex(gn), SurfaceMesh::opposite(gn), Vec3::Zero(), Vec3::Zero(),
+                     Vec3::Zero()};
           const Vec3 &q = pos(v), &q1 = pos(r.w1), &q2 = pos(r.w2);
           if ((q1 - p).squaredNorm() > (mode == CollapseMode::Short ? lmax_short2_ : lmax2_)) return false;
           r.n_old = (q1 - q).cross(q2 - q);
@@ -360,10 +399,11 @@ private:
         if (r.n_old.dot(r.n_new) <= 0) return false;  // fold-over
         dev_local = std::max(dev_local, std::abs((p - pos(r.v)).dot(r.n_old)) / ln_old);
       }
-      if (check_ref && r.n_new.dot(n_ref) <= 0) return false;
+      if (check_ref && r.n_new.dot(n_ref) <= 0 && r.n_old.dot(n_ref) > 0) return false;
       dev_local = std::max(dev_local, std::abs((pos(r.v) - p).dot(r.n_new)) / ln_new);
       // In a cluster of short edges the needles around it get worse until their own short edge goes:
-      // a Short collapse judges only the triangles it leaves without a short edge.
+      // a Short collapse judges only the triangles it leaves without a short edge (such a needle may be
+      // degenerate for a moment; its short edge is collapsed next, and the degenerate pass ends it).
       const Vec3 &q1 = pos(r.w1), &q2 = pos(r.w2);
       if (mode == CollapseMode::Short && std::min({(q1 - p).squaredNorm(), (q2 - p).squaredNorm(),
                                                    (q2 - q1).squaredNorm()}) < lmin2_)
@@ -381,13 +421,28 @@ private:
       case CollapseMode::Fold:
         break;
     }
-    // No new fold: across the new spokes (p, w2) and the ring edges (w1, w2).
-    for (const RingFace& r : ring_) {
+    // No new fold across the new spokes (p, w2) and the ring edges (w1, w2). Where the neighbourhood is
+    // creased already (thin sheets and tubes a few voxels across) a collapse may go if it neither makes
+    // the sharpest crease sharper nor adds a fold; a fold collapse must leave none.
+    double new_worst = 1;
+    int new_folds = 0;
+    for (RingFace& r : ring_) {
       for (const RingFace& s : ring_)
-        if (s.w1 == r.w2 && normals_fold(r.n_new, s.n_new)) return false;
+        if (s.w1 == r.w2) {
+          const double c = normal_cos(r.n_new, s.n_new);
+          new_worst = std::min(new_worst, c);
+          new_folds += c < cos_fold_;
+        }
       const Vertex x = m_.to_vertex(m_.next(r.outer));
-      const Vec3 n_out = (pos(r.w1) - pos(r.w2)).cross(pos(x) - pos(r.w2));
-      if (normals_fold(r.n_new, n_out)) return false;
+      r.n_out = (pos(r.w1) - pos(r.w2)).cross(pos(x) - pos(r.w2));
+      const double c = normal_cos(r.n_new, r.n_out);
+      new_worst = std::min(new_worst, c);
+      new_folds += c < cos_fold_;
+    }
+    if (new_worst < cos_fold_) {
+      if (mode == CollapseMode::Fold) return false;
+      const auto [old_worst, old_folds] = creases_before_collapse(a, b);
+      if (new_worst < old_worst || new_folds > old_folds) return false;
     }
     const double dev_new = std::max(dev_[a.idx], dev_[b.idx]) + dev_local;
     if (mode != CollapseMode::Fold && dev_new > max_dev_) return false;
@@ -485,6 +540,95 @@ private:
     return true;
   }
 
+  // Tangential relaxation ------------------------------------------------------------------------
+  //! A triangle around v before and after v moves: (v, w1, w2), with the face across (w1, w2).
+  struct StarFace {
+    Vertex w1, w2;
+    Vec3 n_old, n_new, n_out;
+    bool degenerate;  // before the move: its normal is noise
+  };
+
+  //! Move v towards the centroid of its one-ring within its tangent plane (full step, else a half or a
+  //! quarter) if that raises the smallest angle of its triangles, inverts none, adds no fold, keeps its
+  //! edges within L_max and the surface within the movement bound. The last resort for a bad triangle that
+  //! no flip or collapse can fix (a needle whose short edge would pinch a thin tube, a cap between creases).
+  //! The vertex keeps its id: it stands for the same surface point, moved a little along the surface as the
+  //! alignment moves every vertex; event lists record re-sampling only (§4.4), so no event is recorded.
+  bool try_relax(Vertex v) {
+    star_.clear();
+    const Vec3& p0 = pos(v);
+    Vec3 centroid = Vec3::Zero(), normal = Vec3::Zero();
+    double old_q = 1;
+    const Halfedge g0 = m_.halfedge(v);
+    Halfedge g = g0;
+    do {
+      const Halfedge gn = m_.next(g);
+      StarFace s{m_.to_vertex(g), m_.to_vertex(gn), Vec3::Zero(), Vec3::Zero(), Vec3::Zero(), false};
+      const Vec3 &q1 = pos(s.w1), &q2 = pos(s.w2);
+      s.n_old = (q1 - p0).cross(q2 - p0);
+      s.n_out = (q1 - q2).cross(pos(m_.to_vertex(m_.next(SurfaceMesh::opposite(gn)))) - q2);
+      const double q = triangle_quality(p0, q1, q2);
+      s.degenerate = !(q > kDegenerateQuality);
+      old_q = std::min(old_q, q);
+      normal += s.n_old;
+      centroid += q1;
+      star_.push_back(s);
+      g = m_.ccw_rotated(g);
+    } while (g != g0);
+    if (!(normal.squaredNorm() > 0)) return false;
+    const Vec3 nv = normal.normalized();
+    Vec3 d = centroid / double(star_.size()) - p0;
+    d -= d.dot(nv) * nv;
+    for (const double t : {1.0, 0.5, 0.25}) {
+      const Vec3 q = p0 + t * d;
+      double new_q = 1;
+      bool ok = true;
+      for (StarFace& s : star_) {
+        const Vec3 &q1 = pos(s.w1), &q2 = pos(s.w2);
+        s.n_new = (q1 - q).cross(q2 - q);
+        if ((q1 - q).squaredNorm() > lmax2_ || !(s.n_new.squaredNorm() > 0) || (!s.degenerate && s.n_old.dot(s.n_new) <= 0)) {
+          ok = false;
+          break;
+        }
+        new_q = std::min(new_q, triangle_quality(q, q1, q2));
+      }
+      // The whole step counts against the movement bound: across a crease or off the end of a sliver the
+      // tangent plane is not the surface, so distances to the face planes would underestimate the move.
+      const double dev_new = dev_[v.idx] + t * d.norm();
+      if (!ok || !(new_q > old_q) || !(new_q > kDegenerateQuality) || dev_new > max_dev_) continue;
+      double old_worst = 1, new_worst = 1;
+      int old_folds = 0, new_folds = 0;
+      // A degenerate triangle had no normal: the crease it shows once it has one is no new fold (the fold
+      // pass judges it next round).
+      for (std::size_t i = 0; i < star_.size(); ++i) {
+        const StarFace &s = star_[i], &next = star_[(i + 1) % star_.size()];
+        if (s.degenerate) continue;
+        for (const auto& [n, m, skip] : {std::tuple{s.n_old, next.n_old, next.degenerate}, std::tuple{s.n_old, s.n_out, false}}) {
+          if (skip) continue;
+          const double c = normal_cos(n, m);
+          old_worst = std::min(old_worst, c);
+          old_folds += c < cos_fold_;
+        }
+        for (const auto& [n, m, skip] : {std::tuple{s.n_new, next.n_new, next.degenerate}, std::tuple{s.n_new, s.n_out, false}}) {
+          if (skip) continue;
+          const double c = normal_cos(n, m);
+          new_worst = std::min(new_worst, c);
+          new_folds += c < cos_fold_;
+        }
+      }
+      if (new_worst < cos_fold_ && (new_worst < old_worst || new_folds > old_folds)) continue;
+      m_.position(v) = q;
+      dev_[v.idx] = dev_new;
+      for (const StarFace& s : star_) dev_[s.w1.idx] = std::max(dev_[s.w1.idx], dev_new);
+      touch_ring(v);
+      ++rep_.relaxations;
+      after_operation();
+      return true;
+    }
+    return false;
+  }
+
+  //! Flip (where flat), else collapse one of its edges (shortest first); else remember it for relax_pass.
   bool fix_bad_triangle(Face f) {
     std::array<std::pair<double, Edge>, 3> edges;
     Halfedge h = m_.halfedge(f);
@@ -498,14 +642,38 @@ private:
         if (try_flip(edges[k].second)) return true;
     for (const auto& [len, e] : edges)
       if (collapse_or_unblock(e, CollapseMode::Improve)) return true;
+    unfixed_.push_back(f.idx);
     return false;
+  }
+
+  //! Relax a corner of each triangle that the last round could not fix and that is still bad: the corner
+  //! opposite its longest edge (the largest angle) first, then the ends of that edge.
+  std::size_t relax_pass() {
+    std::sort(unfixed_.begin(), unfixed_.end());
+    unfixed_.erase(std::unique(unfixed_.begin(), unfixed_.end()), unfixed_.end());
+    std::vector<Index> faces;
+    faces.swap(unfixed_);
+    std::size_t n = 0;
+    for (const Index fi : faces) {
+      const Face f(fi);
+      if (!is_bad(f)) continue;
+      Halfedge longest = m_.halfedge(f);
+      for (Halfedge h = m_.next(longest); h != m_.halfedge(f); h = m_.next(h))
+        if (length2(SurfaceMesh::edge(h)) > length2(SurfaceMesh::edge(longest))) longest = h;
+      for (const Vertex v : {m_.to_vertex(m_.next(longest)), m_.from_vertex(longest), m_.to_vertex(longest)})
+        if (try_relax(v)) {
+          ++n;
+          break;
+        }
+    }
+    return n;
   }
 
   std::size_t bad_triangle_pass(const Candidates& c) {
     std::size_t n = 0;
     for (const auto& [key, fi] : c) {
       const Face f(fi);
-      if (m_.is_deleted(f) || quality(f) >= q_min_) continue;
+      if (!is_bad(f)) continue;
       n += fix_bad_triangle(f);
     }
     return n;
@@ -540,12 +708,14 @@ private:
   ImproveReport& rep_;
   double lmax_short2_ = 0;
   double lmin_ = 0, lmax_ = 0, lmin2_ = 0, lmax2_ = 0, max_dev_ = 0;
-  double q_min_ = 0, q_floor_ = 0, cos_fold_ = 0, cos_flip_bend_ = 1;
+  double q_min_ = 0, q_bad_ = 0, q_floor_ = 0, cos_fold_ = 0, cos_flip_bend_ = 1;
   std::vector<double> dev_;  // accumulated bound of the surface movement near each vertex
   std::vector<std::uint8_t> fbad_;  // survey: face with a small angle
   std::vector<std::uint8_t> eflag_;
   std::vector<RingFace> ring_;
+  std::vector<StarFace> star_;
   std::vector<Index> touched_, local_edges_, local_faces_;
+  std::vector<Index> unfixed_;  // bad triangles that no flip or collapse fixed since the last relax_pass
   std::vector<std::uint8_t> vtouched_;
   std::vector<std::uint32_t> estamp_, fstamp_;
   std::uint32_t stamp_ = 0;

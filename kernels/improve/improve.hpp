@@ -19,6 +19,9 @@ struct ImproveParams {
   double min_dihedral_deg = 45;   //!< smallest allowed dihedral angle, 180 = flat (§4.1: 45°)
   int max_iterations = 20;        //!< cap on the split / collapse / flip rounds
   bool enable_flips = true;       //!< fix bad angles by flips where the surface is nearly flat (§7)
+  //! Where no flip or collapse can fix a bad triangle, move one of its corners a little along the surface
+  //! (tangential relaxation, within max_surface_deviation; the vertex keeps its id, no event).
+  bool enable_relaxation = true;
   //! Bound on how far the operations of one call may move the surface near a vertex, as a fraction of
   //! L (accumulated per vertex). Collapses across a dihedral angle below min_dihedral_deg (folds,
   //! removed on purpose) are exempt.
@@ -33,6 +36,7 @@ struct ImproveParams {
 
 struct ImproveReport {
   std::size_t splits = 0, collapses = 0, flips = 0;
+  std::size_t relaxations = 0;    //!< tangential vertex moves (no event: the vertex keeps its id)
   int iterations = 0;             //!< rounds run (a round that finds nothing to do ends the loop)
   double min_edge_length = 0;     //!< L_min used
   double max_edge_length = 0;     //!< L_max used
@@ -49,7 +53,12 @@ struct ImproveReport {
 //! (i,j) moves the kept vertex to the midpoint, gives it a fresh id k and records record_collapse(i, j, k).
 //! Flips record nothing (no vertex data moves). Vertex properties are interpolated as the events say.
 //! Every operation keeps a closed 2-manifold (link condition, no fold-over or zero-area triangle, no
-//! duplicate edge). The mesh is compacted at the end (ids survive). A mesh already within bounds is left
+//! duplicate edge). Degenerate triangles (is_near_degenerate: needles, caps, zero area, also after
+//! rounding to float) count as bad whatever min_angle_deg is and are removed by a flip or a collapse;
+//! where neither can go (a needle on a tube so thin that its collapse would pinch it, a cap between
+//! creases) a tangential relaxation moves a corner (enable_relaxation; no event, the vertex keeps its id).
+//! In a neighbourhood that is creased already an operation may go if it neither sharpens the sharpest
+//! crease nor adds a fold. The mesh is compacted at the end (ids survive). A mesh already within bounds is left
 //! bit-identical with zero events after one parallel O(n) scan. Deterministic for any thread count
 //! (candidates are found in parallel, operations applied serially in a fixed order).
 //! \pre mesh is a closed 2-manifold.  \throw InvalidInput on bad parameters.

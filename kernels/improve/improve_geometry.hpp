@@ -3,21 +3,14 @@
 #include <algorithm>
 #include <cmath>
 
-#include "kernels/mesh/surface_mesh.hpp"
+#include "kernels/mesh/mesh_queries.hpp"
 
 namespace topotrack::improve_detail {
 
-//! sin of the smallest interior angle of triangle (p0, p1, p2): twice its area over the product of the two
-//! longest edges (the smallest angle lies between them). Monotone in that angle, which is at most 60°, so
-//! it orders triangles like the angle does without a trigonometric call. 0 for a degenerate triangle.
-inline double triangle_quality(const Vec3& p0, const Vec3& p1, const Vec3& p2) {
-  const Vec3 e0 = p1 - p0, e1 = p2 - p1, e2 = p0 - p2;
-  const double l0 = e0.squaredNorm(), l1 = e1.squaredNorm(), l2 = e2.squaredNorm();
-  const double twice_area = e0.cross(e2).norm();
-  const double lmin = std::min({l0, l1, l2});
-  const double prod = (l0 == lmin) ? l1 * l2 : (l1 == lmin ? l0 * l2 : l0 * l1);
-  return prod > 0 ? twice_area / std::sqrt(prod) : 0.0;
-}
+//! sin of the smallest interior angle of triangle (p0, p1, p2) (mesh_queries' min_angle_sin): monotone in
+//! that angle, which is at most 60°, so it orders triangles like the angle does without a trigonometric
+//! call. 0 for a degenerate triangle.
+inline double triangle_quality(const Vec3& p0, const Vec3& p1, const Vec3& p2) { return min_angle_sin(p0, p1, p2); }
 
 //! Distance between segments [p0,p1] and [q0,q1] (Ericson, Real-Time Collision Detection, 5.1.9).
 inline double segment_distance(const Vec3& p0, const Vec3& p1, const Vec3& q0, const Vec3& q1) {
@@ -54,6 +47,13 @@ inline bool normals_within(const Vec3& n, const Vec3& m, double cos_max) {
   if (!(nn > 0)) return false;
   if (cos_max >= 0) return d >= 0 && d * d >= cos_max * cos_max * nn;
   return d >= 0 || d * d <= cos_max * cos_max * nn;
+}
+
+//! Cosine of the angle between (unnormalised) normals n and m; 1 when either vanishes (a degenerate face
+//! has no normal and creases nothing).
+inline double normal_cos(const Vec3& n, const Vec3& m) {
+  const double nn = n.squaredNorm() * m.squaredNorm();
+  return nn > 0 ? n.dot(m) / std::sqrt(nn) : 1.0;
 }
 
 }  // namespace topotrack::improve_detail

@@ -149,6 +149,16 @@ double dihedral_angle_deg(const SurfaceMesh& m, Edge e) {
   return 180.0 - angle_between(n0, n1) * kRadToDeg;
 }
 
+bool is_near_degenerate(const Vec3& p0, const Vec3& p1, const Vec3& p2) {
+  if (!(min_angle_sin(p0, p1, p2) >= kNearDegenerateSin)) return true;
+  // Through volatile floats: the optimiser must not fold the round trip away.
+  const auto rounded = [](const Vec3& p) {
+    volatile float x = static_cast<float>(p.x()), y = static_cast<float>(p.y()), z = static_cast<float>(p.z());
+    return Vec3(double(x), double(y), double(z));
+  };
+  return !(min_angle_sin(rounded(p0), rounded(p1), rounded(p2)) >= kNearDegenerateSin);
+}
+
 QualityStats quality_stats(const SurfaceMesh& m) {
   QualityStats q;
   std::size_t nf = 0, below10 = 0;
@@ -160,6 +170,8 @@ QualityStats quality_stats(const SurfaceMesh& m) {
     q.min_angle_deg = std::min(q.min_angle_deg, mn);
     below10 += mn < 10.0;
     q.below_2deg += mn < 2.0;
+    const auto t = m.vertices(Face(f));
+    q.near_degenerate += is_near_degenerate(m.position(t[0]), m.position(t[1]), m.position(t[2]));
   }
   q.share_below_10deg = nf ? double(below10) / double(nf) : 0.0;
   for (Index e = 0; e < m.edges_size(); ++e) {

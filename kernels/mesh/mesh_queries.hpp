@@ -1,6 +1,8 @@
 #pragma once
 //! Queries over a SurfaceMesh that the stages need: normals, areas, bounding box, components,
 //! Euler characteristic and genus, edge-length and angle statistics. Deleted elements are skipped.
+#include <algorithm>
+#include <cmath>
 #include <vector>
 
 #include "kernels/mesh/surface_mesh.hpp"
@@ -47,11 +49,30 @@ struct QualityStats {
   double min_angle_deg = 180;             //!< smallest interior angle
   double share_below_10deg = 0;           //!< fraction of triangles with an angle below 10°
   std::size_t below_2deg = 0;             //!< triangles with an angle below 2°
+  std::size_t near_degenerate = 0;        //!< triangles is_near_degenerate calls degenerate
   double min_dihedral_deg = 180;          //!< smallest dihedral angle (180 = flat)
   std::size_t dihedral_below_45deg = 0;   //!< interior edges whose dihedral angle is below 45°
   Stats edge_length;
 };
 QualityStats quality_stats(const SurfaceMesh& mesh);
+
+//! sin of the smallest interior angle of triangle (p0, p1, p2): twice its area over the product of its two
+//! longest edges (the smallest angle lies between them); 0 for a degenerate triangle.
+inline double min_angle_sin(const Vec3& p0, const Vec3& p1, const Vec3& p2) {
+  const Vec3 e0 = p1 - p0, e1 = p2 - p1, e2 = p0 - p2;
+  const double l0 = e0.squaredNorm(), l1 = e1.squaredNorm(), l2 = e2.squaredNorm();
+  const double twice_area = e0.cross(e2).norm();
+  const double lmin = std::min({l0, l1, l2});
+  const double prod = (l0 == lmin) ? l1 * l2 : (l1 == lmin ? l0 * l2 : l0 * l1);
+  return prod > 0 ? twice_area / std::sqrt(prod) : 0.0;
+}
+//! sin of the smallest angle below which a triangle counts as degenerate (about 0.057°).
+inline constexpr double kNearDegenerateSin = 1e-3;
+//! Whether triangle (p0, p1, p2) is degenerate or nearly so — zero area, a needle (two corners almost
+//! together) or a cap (a corner almost on the opposite edge): its smallest angle has a sine below
+//! kNearDegenerateSin, computed from the corners as given or rounded to float (as PLY files store them;
+//! `topotrack eval` calls a triangle of zero area there degenerate, so this is at least as strict).
+bool is_near_degenerate(const Vec3& p0, const Vec3& p1, const Vec3& p2);
 
 //! Dihedral angle across an interior edge in degrees: 180 for coplanar faces, 0 for a fold.
 double dihedral_angle_deg(const SurfaceMesh& mesh, Edge e);

@@ -1,6 +1,5 @@
 #include "kernels/raycast/target_surface.hpp"
 
-#include <embree3/rtcore.h>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
@@ -9,25 +8,10 @@
 #include <mutex>
 
 #include "kernels/mesh/mesh_convert.hpp"
+#include "kernels/raycast/embree_scene.hpp"
 
 namespace topotrack {
 namespace {
-
-// One Embree device for the process: creating a device starts Embree's task system, which is too
-// costly to repeat once per frame. Errors are recorded per thread and turned into exceptions.
-thread_local RTCError tls_embree_error = RTC_ERROR_NONE;
-
-void record_embree_error(void*, RTCError code, const char*) { tls_embree_error = code; }
-
-RTCDevice shared_device() {
-  static RTCDevice device = [] {
-    RTCDevice d = rtcNewDevice(nullptr);
-    if (!d) TT_THROW(Error, "Embree: cannot create a device (error " << int(rtcGetDeviceError(nullptr)) << ")");
-    rtcSetDeviceErrorFunction(d, record_embree_error, nullptr);
-    return d;
-  }();
-  return device;
-}
 
 struct PointQueryState {
   const std::vector<Vec3>* positions;
@@ -66,10 +50,7 @@ struct TargetSurface::Impl {
   std::vector<std::array<Index, 3>> triangles;
   std::vector<Vec3> face_normals;
   BoundingBox bounds;
-  RTCScene scene = nullptr;
-  ~Impl() {
-    if (scene) rtcReleaseScene(scene);
-  }
+  EmbreeScene scene;
 
   // Re-intersect the ray with triangle f in double (Möller–Trumbore); Embree works in float.
   double refine(Index f, const Vec3& o, const Vec3& d, double t_float) const {
@@ -104,7 +85,7 @@ struct TargetSurface::Impl {
     rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
     rh.hit.primID = RTC_INVALID_GEOMETRY_ID;
     rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-    rtcIntersect1(scene, &context, &rh);
+    rtcIntersect1(scene.get(), &context, &rh);
     if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return out;
     const Index f = rh.hit.primID;
     const double t = std::max(0.0, refine(f, o, d, double(rh.ray.tfar)));
@@ -155,8 +136,6 @@ TargetSurface::TargetSurface(std::span<const Vec3> positions, std::span<const st
   if (positions.empty() || triangles.empty())
     TT_THROW(InvalidInput, "target surface: empty (" << positions.size() << " vertices, " << triangles.size()
                                                      << " triangles)");
-  if (triangles.size() >= std::size_t(RTC_INVALID_GEOMETRY_ID))
-    TT_THROW(InvalidInput, "target surface: too many triangles (" << triangles.size() << ")");
   Impl& m = *impl_;
   m.positions.assign(positions.begin(), positions.end());
   m.triangles.assign(triangles.begin(), triangles.end());
@@ -175,35 +154,10 @@ TargetSurface::TargetSurface(std::span<const Vec3> positions, std::span<const st
     m.face_normals[f] = len > 0 ? Vec3(n / len) : Vec3::Zero();
   }
 
-  RTCDevice device = shared_device();
-  tls_embree_error = RTC_ERROR_NONE;
-  m.scene = rtcNewScene(device);
-  RTCGeometry geom = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
-  if (!m.scene || !geom) TT_THROW(Error, "Embree: cannot create a scene (error " << int(tls_embree_error) << ")");
-  auto* vb = static_cast<float*>(
-      rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), m.positions.size()));
-  auto* ib = static_cast<unsigned*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
-                                                            3 * sizeof(unsigned), m.triangles.size()));
-  if (!vb || !ib) {
-    rtcReleaseGeometry(geom);
-    TT_THROW(Error, "Embree: cannot allocate buffers (error " << int(tls_embree_error) << ")");
-  }
-  for (std::size_t i = 0; i < m.positions.size(); ++i)
-    for (int c = 0; c < 3; ++c) vb[3 * i + c] = float(m.positions[i][c]);
-  for (std::size_t f = 0; f < m.triangles.size(); ++f)
-    for (int c = 0; c < 3; ++c) ib[3 * f + c] = m.triangles[f][c];
   const RTCBuildQuality q = quality == BuildQuality::Low      ? RTC_BUILD_QUALITY_LOW
                             : quality == BuildQuality::Medium ? RTC_BUILD_QUALITY_MEDIUM
                                                               : RTC_BUILD_QUALITY_HIGH;
-  rtcSetGeometryBuildQuality(geom, q);
-  rtcCommitGeometry(geom);
-  rtcAttachGeometryByID(m.scene, geom, 0);
-  rtcReleaseGeometry(geom);
-  rtcSetSceneBuildQuality(m.scene, q);
-  rtcSetSceneFlags(m.scene, RTC_SCENE_FLAG_ROBUST);
-  rtcCommitScene(m.scene);
-  if (tls_embree_error != RTC_ERROR_NONE)
-    TT_THROW(Error, "Embree: building the target scene failed (error " << int(tls_embree_error) << ")");
+  m.scene = EmbreeScene(m.positions, m.triangles, q, RTC_SCENE_FLAG_ROBUST);
 }
 
 TargetSurface TargetSurface::from_mesh(const SurfaceMesh& mesh, BuildQuality quality) {
@@ -259,7 +213,7 @@ TargetSurface::Hit TargetSurface::closest_point(const Vec3& p, double max_distan
                      : std::numeric_limits<float>::infinity();
   RTCPointQueryContext context;
   rtcInitPointQueryContext(&context);
-  rtcPointQuery(impl_->scene, &query, &context, point_query_callback, &state);
+  rtcPointQuery(impl_->scene.get(), &query, &context, point_query_callback, &state);
   if (state.best_face == kInvalidIndex) return out;
   const double d = std::sqrt(state.best_d2);
   if (d > max_distance) return out;

@@ -3,6 +3,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 
@@ -364,7 +365,8 @@ CoarseReport align_coarse(SurfaceMesh& mesh, const TargetSurface& target, const 
   if (!(params.node_spacing_factor > 0) || !(params.graph_density > 0) || params.graph_density > 1 ||
       !(params.alpha_reg_start > 0) || !(params.alpha_reg_min > 0) || !(params.alpha_fit >= 0) ||
       !(params.alpha_point >= 0) || !(params.alpha_plane >= 0) || params.max_iterations < 0 ||
-      params.max_iterations_per_level < 1 || !(params.damping > 0))
+      params.max_iterations_per_level < 1 || !(params.damping > 0) || !(params.step_tolerance >= 0) ||
+      !(params.fit_tolerance >= 0))
     TT_THROW(InvalidInput, "align_coarse: invalid parameters");
   if (mesh.n_vertices() == 0 || mesh.n_faces() == 0) TT_THROW(InvalidInput, "align_coarse: empty mesh");
 
@@ -377,7 +379,8 @@ CoarseReport align_coarse(SurfaceMesh& mesh, const TargetSurface& target, const 
   const double inv_d2 = 1.0 / (D * D);
 
   auto t0 = Clock::now();
-  const double spacing = params.node_spacing_factor * mean_edge_length(mesh) / std::sqrt(params.graph_density);
+  const double edge = mean_edge_length(mesh);
+  const double spacing = params.node_spacing_factor * edge / std::sqrt(params.graph_density);
   const DeformationGraph graph = build_deformation_graph(mesh, spacing, params.k);
   const std::vector<Vec3> rest = mesh.positions();
   const Problem problem{graph, rest, mesh};
@@ -406,6 +409,7 @@ CoarseReport align_coarse(SurfaceMesh& mesh, const TargetSurface& target, const 
   Eigen::VectorXd grad;
   double alpha_reg = params.alpha_reg_start;
   int level_iterations = 0;
+  rep.levels = 1;
   bool first = true;
   for (int it = 0; it < params.max_iterations; ++it) {
     // Correspondences from each node along its (deformed) normal.
@@ -475,6 +479,16 @@ CoarseReport align_coarse(SurfaceMesh& mesh, const TargetSurface& target, const 
         break;
       }
     }
+    // Convergence measures in lengths (deterministic: serial, node order): the largest node motion of
+    // the step and the mean distance of the nodes to their correspondences after it.
+    double motion = 0, fit_distance = 0;
+    if (accepted)  // `trial` now holds the state before the step
+      for (std::size_t j = 0; j < nn; ++j)
+        motion = std::max(motion, (state[j].A - trial[j].A).norm() * spacing + (state[j].b - trial[j].b).norm());
+    for (std::size_t j = 0; j < nn; ++j)
+      if (corr[j].valid()) fit_distance += (graph.node_position[j] + state[j].b - corr[j].point).norm();
+    fit_distance /= double(std::max<std::size_t>(1, counts.ok));
+    rep.mean_fit_distance = fit_distance;
     rep.seconds_assembly += seconds_since(t0);
     rep.iterations = it + 1;
     rep.energy_history.push_back(after.total);
@@ -483,12 +497,19 @@ CoarseReport align_coarse(SurfaceMesh& mesh, const TargetSurface& target, const 
     rep.alpha_reg_end = alpha_reg;
     ++level_iterations;
 
-    const bool converged = !accepted || before.total - after.total <= params.convergence_tolerance * before.total;
+    // Converged: the step no longer lowers the energy for the current correspondences, or nothing
+    // moves. (Energies of successive rounds are not compared: they are over different correspondence
+    // sets, and a round that gains correspondences raises the energy while making progress.)
+    const bool converged = !accepted ||
+                           before.total - after.total <= params.convergence_tolerance * before.total ||
+                           motion <= params.step_tolerance * edge;
     if (converged || level_iterations >= params.max_iterations_per_level) {
+      if (converged && fit_distance <= params.fit_tolerance * edge) break;
       alpha_reg /= 10;
       level_iterations = 0;
       refactor = true;
       if (alpha_reg < params.alpha_reg_min * (1 - 1e-12)) break;
+      ++rep.levels;
     }
   }
 

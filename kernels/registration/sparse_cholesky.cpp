@@ -36,20 +36,7 @@ void SparseCholesky::factorize(const Matrix& lower) {
                                                                  << " system failed (not positive definite)");
 }
 
-Eigen::VectorXd SparseCholesky::solve(const Eigen::VectorXd& b) const {
-  Eigen::VectorXd x;
-  Eigen::ComputationInfo info;
-  if (backend_ == CholeskyBackend::Cholmod) {
-    x = impl_->cholmod.solve(b);
-    info = impl_->cholmod.info();
-  } else {
-    x = impl_->ldlt.solve(b);
-    info = impl_->ldlt.info();
-  }
-  if (info != Eigen::Success || !x.allFinite())
-    TT_THROW(SolverError, "sparse Cholesky: solve of a " << b.size() << "-unknown system failed");
-  return x;
-}
+Eigen::VectorXd SparseCholesky::solve(const Eigen::VectorXd& b) const { return solve(Eigen::MatrixXd(b)).col(0); }
 
 Eigen::MatrixXd SparseCholesky::solve(const Eigen::MatrixXd& b) const {
   Eigen::MatrixXd x;

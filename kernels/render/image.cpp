@@ -42,7 +42,7 @@ Image contact_sheet(std::span<const Image> images, const ContactSheetParams& par
   return sheet;
 }
 
-ImageDifference compare_images(const Image& a, const Image& b, int tolerance) {
+ImageDifference compare_images(const Image& a, const Image& b, const CompareParams& params) {
   check(a, "compare_images");
   check(b, "compare_images");
   if (a.width != b.width || a.height != b.height)
@@ -50,23 +50,45 @@ ImageDifference compare_images(const Image& a, const Image& b, int tolerance) {
                                                            << b.height);
   ImageDifference d;
   const std::size_t pixels = std::size_t(a.width) * a.height;
-  if (pixels == 0) return d;
+  auto ignored = [&](const std::uint8_t* p) {
+    return params.ignore && p[0] == (*params.ignore)[0] && p[1] == (*params.ignore)[1] && p[2] == (*params.ignore)[2];
+  };
   double sum = 0, sum2 = 0;
   std::size_t differing = 0;
+  std::array<std::size_t, 256> histogram{};  // of the pixel differences
   for (std::size_t p = 0; p < pixels; ++p) {
+    const std::uint8_t* pa = a.rgb.data() + 3 * p;
+    const std::uint8_t* pb = b.rgb.data() + 3 * p;
+    if (ignored(pa) && ignored(pb)) continue;
     int worst = 0;
     for (int c = 0; c < 3; ++c) {
-      const int diff = std::abs(int(a.rgb[3 * p + c]) - int(b.rgb[3 * p + c]));
+      const int diff = std::abs(int(pa[c]) - int(pb[c]));
       sum += diff;
       sum2 += double(diff) * diff;
       worst = std::max(worst, diff);
     }
-    d.max_abs = std::max(d.max_abs, worst);
-    if (worst > tolerance) ++differing;
+    ++histogram[worst];
+    ++d.pixels_compared;
+    if (worst > params.tolerance) ++differing;
   }
-  d.mean_abs = sum / (3.0 * pixels);
-  d.rms = std::sqrt(sum2 / (3.0 * pixels));
-  d.share_differing = double(differing) / pixels;
+  const std::size_t n = d.pixels_compared;
+  if (n == 0) return d;
+  d.mean_abs = sum / (3.0 * n);
+  d.rms = std::sqrt(sum2 / (3.0 * n));
+  d.share_differing = double(differing) / n;
+  std::size_t seen = 0, weighted = 0;
+  bool p95_set = false;
+  for (int v = 0; v < 256; ++v) {
+    if (histogram[v] == 0) continue;
+    seen += histogram[v];
+    weighted += histogram[v] * std::size_t(v);
+    d.max_abs = v;
+    if (!p95_set && 20 * seen >= 19 * n) {
+      d.pixel_p95 = v;
+      p95_set = true;
+    }
+  }
+  d.pixel_mean = double(weighted) / n;
   return d;
 }
 

@@ -1,6 +1,8 @@
 #pragma once
 //! 8-bit RGB images for the renderer (§5 pictures): storage, contact sheets, per-pixel comparison.
+#include <array>
 #include <cstdint>
+#include <optional>
 #include <span>
 #include <vector>
 
@@ -28,14 +30,22 @@ struct ContactSheetParams {
 //! \throw InvalidInput when `images` is empty or an image's pixel buffer has the wrong size.
 Image contact_sheet(std::span<const Image> images, const ContactSheetParams& params = {});
 
-//! Per-pixel comparison of two images of equal size.
+//! Per-pixel comparison of two images of equal size. A pixel's difference is its largest channel difference.
+struct CompareParams {
+  int tolerance = 0;  //!< a pixel differs when its difference exceeds this
+  //! Pixels of this colour in both images (e.g. the background) are left out of every statistic.
+  std::optional<std::array<std::uint8_t, 3>> ignore;
+};
 struct ImageDifference {
+  std::size_t pixels_compared = 0;
   double mean_abs = 0;        //!< mean absolute channel difference, in [0, 255]
   double rms = 0;             //!< root mean square channel difference
   int max_abs = 0;            //!< largest channel difference
-  double share_differing = 0; //!< fraction of pixels with any channel differing by more than `tolerance`
+  double pixel_mean = 0;      //!< mean pixel difference
+  int pixel_p95 = 0;          //!< 95th percentile of the pixel differences
+  double share_differing = 0; //!< fraction of the pixels compared differing by more than the tolerance
 };
 //! \throw InvalidInput when the sizes differ.
-ImageDifference compare_images(const Image& a, const Image& b, int tolerance = 0);
+ImageDifference compare_images(const Image& a, const Image& b, const CompareParams& params = {});
 
 }  // namespace topotrack

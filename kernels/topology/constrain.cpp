@@ -52,6 +52,32 @@ bool carry_property(const SurfaceMesh& old_mesh, SurfaceMesh& out, const std::st
   return true;
 }
 
+// One event per patch (§4.4). A deleted patch (ids of the old mesh) lists its vertices and the ring around it as
+// in-vertices, the ring as out-vertices, and has backward rules; a created patch (ids of the new mesh) the ring
+// as in-vertices, the ring and its vertices as out-vertices, and forward rules.
+void record_patches(const SurfaceMesh& m, const std::vector<MarchedPatch>& patches, EventKind kind, EventList& events) {
+  const bool created = kind == EventKind::PatchCreate;
+  std::vector<RuleTerm> terms;
+  for (const MarchedPatch& P : patches) {
+    events.begin_event(kind);
+    if (!created)
+      for (Index v : P.order) events.add_in(m.id(Vertex(v)));
+    for (Index v : P.boundary) events.add_in(m.id(Vertex(v)));
+    for (Index v : P.boundary) events.add_out(m.id(Vertex(v)));
+    if (created)
+      for (Index v : P.order) events.add_out(m.id(Vertex(v)));
+    for (std::size_t r = 0; r < P.ruled; ++r) {
+      terms.clear();
+      for (std::uint32_t k = P.rule_begin[r]; k < P.rule_begin[r + 1]; ++k)
+        terms.push_back({m.id(Vertex(P.terms[k].first)), P.terms[k].second});
+      const VertexId target = m.id(Vertex(P.order[r]));
+      if (created) events.add_forward_rule(target, terms);
+      else events.add_backward_rule(target, terms);
+    }
+    events.end_event();
+  }
+}
+
 void record(const SurfaceMesh& old_mesh, const SurfaceMesh& out, const Assembly& A, const Weights& W,
             EventList& events) {
   // Cut points of kept triangles: edge splits and triangle subdivisions with their exact weights.
@@ -63,33 +89,8 @@ void record(const SurfaceMesh& old_mesh, const SurfaceMesh& out, const Assembly&
       events.record_subdivide(old_mesh.id(pw.v[0]), old_mesh.id(pw.v[1]), old_mesh.id(pw.v[2]), id, pw.w[0], pw.w[1],
                               pw.w[2]);
   }
-  std::vector<RuleTerm> terms;
-  for (const MarchedPatch& P : W.deleted) {
-    events.begin_event(EventKind::PatchDelete);
-    for (Index v : P.order) events.add_in(old_mesh.id(Vertex(v)));
-    for (Index v : P.boundary) events.add_in(old_mesh.id(Vertex(v)));
-    for (Index v : P.boundary) events.add_out(old_mesh.id(Vertex(v)));
-    for (std::size_t r = 0; r < P.ruled; ++r) {
-      terms.clear();
-      for (std::uint32_t k = P.rule_begin[r]; k < P.rule_begin[r + 1]; ++k)
-        terms.push_back({old_mesh.id(Vertex(P.terms[k].first)), P.terms[k].second});
-      events.add_backward_rule(old_mesh.id(Vertex(P.order[r])), terms);
-    }
-    events.end_event();
-  }
-  for (const MarchedPatch& P : W.created) {
-    events.begin_event(EventKind::PatchCreate);
-    for (Index v : P.boundary) events.add_in(out.id(Vertex(v)));
-    for (Index v : P.boundary) events.add_out(out.id(Vertex(v)));
-    for (Index v : P.order) events.add_out(out.id(Vertex(v)));
-    for (std::size_t r = 0; r < P.ruled; ++r) {
-      terms.clear();
-      for (std::uint32_t k = P.rule_begin[r]; k < P.rule_begin[r + 1]; ++k)
-        terms.push_back({out.id(Vertex(P.terms[k].first)), P.terms[k].second});
-      events.add_forward_rule(out.id(Vertex(P.order[r])), terms);
-    }
-    events.end_event();
-  }
+  record_patches(old_mesh, W.deleted, EventKind::PatchDelete, events);
+  record_patches(out, W.created, EventKind::PatchCreate, events);
 }
 
 }  // namespace
@@ -115,6 +116,7 @@ ConstrainReport constrain_topology(SurfaceMesh& mesh, const openvdb::FloatGrid& 
     return report;
   }
   report.components_before = int(connected_components(mesh));
+  absorb_sliver_pieces(mesh, cut, region);
 
   // Replacement, growing the region when a check fails (§4.3: "if a local repair fails, grow").
   const auto t1 = Clock::now();
@@ -141,6 +143,7 @@ ConstrainReport constrain_topology(SurfaceMesh& mesh, const openvdb::FloatGrid& 
       TT_THROW(TopologyError, "constrain topology: replacement failed after growing the complex region "
                                   << attempt << " times: " << why);
     region = grow_region(region);
+    absorb_sliver_pieces(mesh, cut, region);
     ++report.region_growth;
   }
   report.complex_cells = region.size();

@@ -21,7 +21,10 @@
 //!     polygons that picked up curve points are fanned from a new centroid vertex. The result is a
 //!     closed, oriented 2-manifold by construction; it is checked (SurfaceMesh::from_triangles and
 //!     validate), and should a check ever fail the complex region is grown by one cell layer and the
-//!     replacement redone, up to `max_region_growth` times.
+//!     replacement redone, up to `max_region_growth` times. No slivers where avoidable: M's vertices are
+//!     pushed kSnap voxels off the lattice planes before cutting, patch vertices stay kSnap off the lattice
+//!     nodes, kept pieces are fanned from their widest corner, and the cells of tiny kept pieces join the
+//!     region (absorb_sliver_pieces).
 //!  4. Events (§4.4), in this order: the points where the cut subdivides kept triangles (edge splits and
 //!     triangle subdivisions with exact interpolation weights); one PatchDelete per connected patch of
 //!     removed vertices (backward rules by breadth-first march from the kept vertices around it, each

@@ -276,6 +276,7 @@ LatticeCut cut_by_lattice(const SurfaceMesh& mesh, const openvdb::math::Transfor
   LatticeCut cut;
   const std::size_t nv = mesh.vertices_size(), nf = mesh.faces_size();
   cut.P.resize(nv);
+  cut.snapped.assign(nv, 0);
   std::vector<std::uint8_t> fault(nv, 0);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv, 4096), [&](const tbb::blocked_range<std::size_t>& r) {
     for (std::size_t i = r.begin(); i != r.end(); ++i) {
@@ -284,9 +285,17 @@ LatticeCut cut_by_lattice(const SurfaceMesh& mesh, const openvdb::math::Transfor
       Vec3 p(q.x(), q.y(), q.z());
       for (int a = 0; a < 3; ++a) {
         if (mesh.is_deleted(Vertex(Index(i)))) break;
-        if (!std::isfinite(p[a])) fault[i] = 1;
-        else if (std::abs(p[a]) > kCellRange - 4) fault[i] = 2;
+        if (!std::isfinite(p[a])) {
+          fault[i] = 1;
+          continue;
+        }
+        if (std::abs(p[a]) > kCellRange - 4) fault[i] = 2;
         p[a] += kShift[a];
+        const double plane = std::floor(p[a]), frac = p[a] - plane;
+        if (frac < 2 * kSnap) p[a] = plane + kSnap + 0.5 * frac;
+        else if (frac > 1.0 - 2 * kSnap) p[a] = plane + 1.0 - kSnap - 0.5 * (1.0 - frac);
+        else continue;
+        cut.snapped[i] = 1;
       }
       cut.P[i] = p;
     }

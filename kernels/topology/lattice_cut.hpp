@@ -23,6 +23,13 @@ namespace topotrack::topology {
 
 //! The translation of the working copy, in voxels.
 inline constexpr double kShift[3] = {1.0e-4, 1.37e-4, 1.71e-4};
+//! Vertices of the working copy closer than 2 kSnap (in voxels) to a lattice plane are pushed away from it,
+//! on their own side, by the map d -> kSnap + d / 2 of their distance d: the cut then never leaves a piece
+//! thinner than kSnap next to a vertex (Wojtan et al. 2009 push nearly-zero lattice values off zero for the
+//! same reason). The map is increasing along each axis, so no two vertices meet, and no vertex changes side:
+//! which mesh edges cross which planes does not change. The moved positions are used for the output only
+//! where the cut re-triangulates (the kept pieces around complex cells): a move of at most kSnap voxels.
+inline constexpr double kSnap = 1.0e-2;
 
 //! A point of the subdivision. Ordered, so it can be sorted and searched.
 struct PointKey {
@@ -73,7 +80,8 @@ struct Piece {
 
 //! M cut by the lattice.
 struct LatticeCut {
-  std::vector<Vec3> P;             //!< index-space vertex positions plus kShift (per vertex handle)
+  std::vector<Vec3> P;             //!< index-space vertex positions plus kShift, snapped (per vertex handle)
+  std::vector<std::uint8_t> snapped;  //!< per vertex handle: P was moved off a plane (see kSnap)
   std::vector<Piece> pieces;       //!< in face order; the pieces of a face are contiguous
   std::vector<std::uint32_t> face_pieces;  //!< face f has pieces [face_pieces[f], face_pieces[f+1])
   std::vector<PointKey> keys;      //!< corners of the pieces

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <unordered_map>
@@ -28,7 +29,7 @@ struct Builder {
   std::vector<Index> old_to_out;
   std::unordered_map<PointKey, Index, PointKeyHash> derived_of;
   std::unordered_map<std::uint64_t, Index> lattice_of;
-  std::vector<Vec3> index_pos;  // index-space positions of derived and patch vertices (kept ones unused)
+  std::vector<Vec3> index_pos;  // positions in the cut's frame (index space plus kShift, snapped) of all output vertices
 
   bool complex(std::uint64_t cell) const { return std::binary_search(region.begin(), region.end(), cell); }
   bool complex(const openvdb::Coord& c) const { return complex(cell_key(c)); }
@@ -72,6 +73,23 @@ struct Builder {
     for (std::size_t k = 1; k + 1 < n; ++k) out.triangles.push_back({Q[apex], Q[(apex + k) % n], Q[(apex + k + 1) % n]});
   }
 
+  // The fan apex of a convex piece whose smallest triangle is largest: where a mesh edge passes close to a
+  // lattice line, three corners of the piece nearly meet, and a fan from one of them makes a needless sliver.
+  std::size_t widest_apex(const std::vector<Index>& Q) const {
+    const std::size_t n = Q.size();
+    if (n <= 3) return 0;
+    std::size_t best = 0;
+    double best_area = -1;
+    for (std::size_t a = 0; a < n; ++a) {
+      double lo = std::numeric_limits<double>::infinity();
+      const Vec3& p = index_pos[Q[a]];
+      for (std::size_t k = 1; k + 1 < n; ++k)
+        lo = std::min(lo, (index_pos[Q[(a + k) % n]] - p).cross(index_pos[Q[(a + k + 1) % n]] - p).squaredNorm());
+      if (lo > best_area) best_area = lo, best = a;
+    }
+    return best;
+  }
+
   void centroid_fan(const std::vector<Index>& Q, const PointKey* derived_key, const Vec3* at = nullptr) {
     Vec3 c = Vec3::Zero();
     for (Index q : Q) c += index_pos[q];
@@ -104,6 +122,10 @@ struct Builder {
         if (f.is_valid() && split[f.idx]) split_edge[e] = 1;
       }
     }
+    // Kept vertices that the re-triangulation touches take the position the cut used (snapped, see kSnap).
+    std::vector<std::uint8_t> touched(nv, 0);
+    for (std::size_t e = 0; e < split_edge.size(); ++e)
+      if (split_edge[e]) touched[mesh.vertex(Edge(Index(e)), 0).idx] = touched[mesh.vertex(Edge(Index(e)), 1).idx] = 1;
     // Kept vertices of M, in handle order.
     old_to_out.assign(nv, kInvalidIndex);
     for (std::size_t v = 0; v < nv; ++v) {
@@ -115,7 +137,7 @@ struct Builder {
       }
       old_to_out[v] = Index(out.positions.size());
       out.kept_old.push_back(Index(v));
-      out.positions.push_back(mesh.position(vh));
+      out.positions.push_back(touched[v] && cut.snapped[v] ? cut_to_world(theta.transform(), cut.P[v]) : mesh.position(vh));
       index_pos.push_back(cut.P[v]);
     }
     // M's triangles and kept pieces.
@@ -161,7 +183,7 @@ struct Builder {
           Q.push_back(point(cut.keys[pc.begin + i], true));
           if (Q.back() == kInvalidIndex) return fail("kept piece with a removed vertex");
         }
-        fan(Q, 0);
+        fan(Q, widest_apex(Q));
       }
     }
     return patch();
@@ -255,8 +277,9 @@ struct Builder {
             const auto it = lattice_of.find(lk);
             if (it != lattice_of.end()) vert[i] = it->second;
             else {
-              const openvdb::Vec3d q =
-                  edge_point_index(le, val[cube::edge_corner(e, 0)], val[cube::edge_corner(e, 1)], 0.0);
+              // Kept kSnap away from the lattice nodes, like M's own vertices: no sliver around a node.
+              openvdb::Vec3d q = edge_point_index(le, val[cube::edge_corner(e, 0)], val[cube::edge_corner(e, 1)], 0.0);
+              q[L] = le.origin[L] + std::clamp(q[L] - le.origin[L], kSnap, 1.0 - kSnap);
               vert[i] = new_vertex(Vec3(q.x() + kShift[0], q.y() + kShift[1], q.z() + kShift[2]));
               ++out.n_patch;
               lattice_of.emplace(lk, vert[i]);
@@ -327,6 +350,42 @@ bool assemble(const SurfaceMesh& mesh, const LatticeCut& cut, const CellIndex& i
   out = Assembly();
   Builder b{mesh, cut, index, region, theta, out, why, {}, {}, {}, {}};
   return b.run();
+}
+
+std::size_t absorb_sliver_pieces(const SurfaceMesh& mesh, const LatticeCut& cut, std::vector<std::uint64_t>& region) {
+  const std::size_t n0 = region.size(), nf = mesh.faces_size();
+  std::vector<std::uint64_t> add;
+  for (int round = 0; round < 16; ++round) {
+    auto in_region = [&](std::uint64_t c) { return std::binary_search(region.begin(), region.end(), c); };
+    std::vector<std::vector<std::uint64_t>> found(nf ? (nf + 4095) / 4096 : 0);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, found.size()), [&](const tbb::blocked_range<std::size_t>& r) {
+      for (std::size_t chunk = r.begin(); chunk != r.end(); ++chunk)
+        for (std::size_t f = chunk * 4096; f < std::min(nf, (chunk + 1) * 4096); ++f) {
+          const std::uint32_t pb = cut.face_pieces[f], pe = cut.face_pieces[f + 1];
+          if (pe - pb < 2) continue;
+          bool reaches = false;
+          for (std::uint32_t p = pb; p < pe && !reaches; ++p) reaches = in_region(cut.pieces[p].cell);
+          if (!reaches) continue;
+          for (std::uint32_t p = pb; p < pe; ++p) {
+            const Piece& pc = cut.pieces[p];
+            if (in_region(pc.cell)) continue;
+            const Vec3 o = point_position(mesh, cut.P, cut.keys[pc.begin]);
+            Vec3 n = Vec3::Zero();
+            for (int i = 1; i + 1 < pc.size; ++i)
+              n += (point_position(mesh, cut.P, cut.keys[pc.begin + i]) - o)
+                       .cross(point_position(mesh, cut.P, cut.keys[pc.begin + i + 1]) - o);
+            if (0.5 * n.norm() < kMinKeptPieceArea) found[chunk].push_back(pc.cell);
+          }
+        }
+    });
+    add.clear();
+    for (const auto& v : found) add.insert(add.end(), v.begin(), v.end());
+    if (add.empty()) break;
+    region.insert(region.end(), add.begin(), add.end());
+    std::sort(region.begin(), region.end());
+    region.erase(std::unique(region.begin(), region.end()), region.end());
+  }
+  return region.size() - n0;
 }
 
 std::vector<std::uint64_t> grow_region(const std::vector<std::uint64_t>& region) {

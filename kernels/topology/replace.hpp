@@ -34,6 +34,15 @@ bool assemble(const SurfaceMesh& mesh, const LatticeCut& cut, const CellIndex& i
               const std::vector<std::uint64_t>& region, const openvdb::FloatGrid& theta, Assembly& out,
               std::string& why);
 
+//! Pieces of M smaller than this (index space, voxels squared) are not kept next to a complex cell.
+inline constexpr double kMinKeptPieceArea = 1e-6;
+
+//! Add to `region` (sorted keys, kept sorted) every cell holding a piece smaller than kMinKeptPieceArea of a
+//! face that reaches the region, until there is none: such a piece, where a mesh edge passes close to a
+//! lattice line, would be kept as a sliver; replacing its cell too costs a few patch triangles. Returns the
+//! number of cells added.
+std::size_t absorb_sliver_pieces(const SurfaceMesh& mesh, const LatticeCut& cut, std::vector<std::uint64_t>& region);
+
 //! `region` grown by one layer of cells (26-neighbourhood).
 std::vector<std::uint64_t> grow_region(const std::vector<std::uint64_t>& region);
 

@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """Regenerates the small test inputs of tests/data (committed; run only to change them):
 bad/       malformed or degenerate mesh files, one fault each (expected outcomes in tests/tools/CMakeLists.txt)
-sequences/ tiny frame folders (duplicate numbers, a gap, no frames)
+sequences/ tiny frame folders (duplicate numbers, a gap, no frames; open_holes: a moving sphere with holes for
+           `track --close-holes`)
 events/    event-list files (docs/formats.md) for `topotrack events`
 """
 import os
@@ -93,6 +94,8 @@ def main():
     put(BAD, "obj_two_coordinates.obj", obj().replace("v 0 0 1", "v 0 0"))
     put(BAD, "obj_no_vertices.obj", "# nothing but a comment\ng empty\n")
     put(BAD, "obj_bad_corner.obj", obj().replace("f 1 3 5", "f 1 3/1/1/1 5"))
+    # found by tests/fuzz/fuzz_obj: -2^63 as a relative index (its negation overflowed, and the index was kept)
+    put(BAD, "obj_int64_min_index.obj", "v 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 2 -9223372036854775808\n")
     put(BAD, "obj_binary_garbage.obj", b"v " + bytes(rnd.randrange(256) for _ in range(512)))
     # Other files
     put(BAD, "unknown_extension.stl", "solid s\nendsolid s\n")
@@ -145,6 +148,39 @@ def main():
     put(ev, "bad_magic.events", b"TTEVENTX" + good[8:])
     put(ev, "flipped_byte.events", good[:100] + bytes([good[100] ^ 0x10]) + good[101:])
     put(ev, "empty.events", b"")
+
+    open_holes_sequence(os.path.join(HERE, "sequences", "open_holes"))
+
+
+def open_holes_sequence(folder):
+    """A sphere of radius 0.5 moving along x, 3 frames, each with holes (triangles removed around one or two
+    directions, each hole about 0.2 across): `track` rejects frame 1, `track --close-holes` tracks it."""
+    import math
+    rings, sectors = 16, 32
+    for frame, holes in ((1, [(1, 0, 0)]), (2, [(0, 1, 0), (0, 0, -1)]), (3, [(-0.6, 0.8, 0)])):
+        c = (0.05 * (frame - 1), 0.0, 0.0)
+        v = [(0.0, 0.0, 1.0)]
+        for r in range(1, rings):
+            th = math.pi * r / rings
+            v += [(math.sin(th) * math.cos(2 * math.pi * s / sectors), math.sin(th) * math.sin(2 * math.pi * s / sectors),
+                   math.cos(th)) for s in range(sectors)]
+        v.append((0.0, 0.0, -1.0))
+        ring = lambda r, s: 1 + (r - 1) * sectors + s % sectors
+        f = []
+        for s in range(sectors):
+            f += [(0, ring(1, s), ring(1, s + 1)), (len(v) - 1, ring(rings - 1, s + 1), ring(rings - 1, s))]
+        for r in range(1, rings - 1):
+            for s in range(sectors):
+                a, b, cc, d = ring(r, s), ring(r, s + 1), ring(r + 1, s), ring(r + 1, s + 1)
+                f += [(a, cc, b), (b, cc, d)]
+        def near_hole(t):
+            m = [sum(v[i][k] for i in t) / 3 for k in range(3)]
+            return any(sum(m[k] * h[k] for k in range(3)) / math.sqrt(sum(x * x for x in h)) > 0.95 for h in holes)
+        f = [t for t in f if not near_hole(t)]
+        verts = [(0.5 * x + c[0], 0.5 * y + c[1], 0.5 * z + c[2]) for x, y, z in v]
+        body = b"".join(struct.pack("<3f", *p) for p in verts)
+        body += b"".join(struct.pack("<B3i", 3, *t) for t in f)
+        put(folder, f"sphere.{frame:04d}.ply", ply_header("binary_little_endian", len(verts), len(f)).encode() + body)
 
 
 if __name__ == "__main__":

@@ -72,4 +72,22 @@ cp "$W/gen/blobs.0001.ply" "$W/open/s.0001.ply"
 printf 'v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 2 3\nf 1 3 4\n' >"$W/open/s.0002.obj"
 expect 3 "s.0002.obj" -- "$BIN" track "$W/open" -o "$W/d" --quiet
 echo "ok: bad input and usage errors exit 3 / 2 naming the file"
+
+# Open surfaces (docs/robustness.md): rejected naming the file and its holes; --close-holes closes them through
+# the level set, tracks the sequence and reports what it closed per frame in track.json.
+OPEN=$(cd "$(dirname "$0")/../data/sequences/open_holes" && pwd)
+expect 3 "sphere.0001.ply: the surface is open: [0-9]* boundary edges in 1 hole (largest: " -- \
+  "$BIN" track "$OPEN" -o "$W/o" --quiet
+[ -e "$W/o/sphere.0001.ply" ] && fail "a rejected open frame left output behind"
+expect 3 "sphere.0001.ply: a hole of [0-9]* boundary edges is .* larger than --close-holes closes (2 voxels" -- \
+  "$BIN" track "$OPEN" -o "$W/o" --close-holes --max-hole 2 --quiet
+expect 2 "max-hole" -- "$BIN" track "$OPEN" -o "$W/o" --close-holes --max-hole 0 --quiet
+"$BIN" track "$OPEN" -o "$W/o" --close-holes --progress lines 2>"$W/err" >/dev/null || { cat "$W/err"; fail "--close-holes"; }
+grep -q "warning: frame 2: closed 2 holes" "$W/err" || { cat "$W/err"; fail "--close-holes does not say what it closed"; }
+[ "$(grep -c '"holes_closed": ' "$W/o/track.json")" -eq 3 ] || fail "track.json: holes_closed missing"
+grep -q '"holes_closed": 2' "$W/o/track.json" || fail "track.json: frame 2 closed 2 holes"
+for i in 1 2 3; do
+  "$BIN" info "$W/o/sphere.000$i.ply" | grep -q "closed,manifold" || fail "tracked frame $i is not closed"
+done
+echo "ok: open frames rejected naming their holes; --close-holes tracks them and reports the repair"
 echo "track_cli_test: all passed"

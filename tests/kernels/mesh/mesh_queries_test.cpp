@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 #include "kernels/mesh/mesh_convert.hpp"
 #include "tests/support/test_meshes.hpp"
 
@@ -42,6 +44,23 @@ TEST(MeshQueries, DihedralOfFold) {
   for (Index e = 0; e < m.edges_size(); ++e)
     if (!m.is_boundary(Edge(e))) shared = Edge(e);
   EXPECT_LT(dihedral_angle_deg(m, shared), 5.0);
+}
+
+TEST(MeshQueries, NearDegenerateTriangles) {
+  const Vec3 a(0, 0, 0), b(1, 0, 0), c(0.5, 0.8, 0);
+  EXPECT_FALSE(is_near_degenerate(a, b, c));
+  EXPECT_NEAR(min_angle_sin(a, b, Vec3(0, 1, 0)), std::sin(M_PI / 4), 1e-12);
+  EXPECT_TRUE(is_near_degenerate(a, b, Vec3(0.5, 0, 0)));      // zero area: a corner on the opposite edge
+  EXPECT_TRUE(is_near_degenerate(a, b, Vec3(0.5, 1e-4, 0)));   // cap
+  EXPECT_TRUE(is_near_degenerate(a, b, Vec3(1e-4, 1e-5, 0)));  // needle: two corners almost together
+  EXPECT_TRUE(is_near_degenerate(a, a, c));
+  // Well shaped in double, zero area once rounded to float (as a PLY file stores it, where `eval` looks).
+  const Vec3 far(1000, 1000, 1000), d(1e-6, 0, 0), e(0.5e-6, 0.8e-6, 0);
+  ASSERT_GT(min_angle_sin(far, far + d, far + e), 0.5);
+  EXPECT_TRUE(is_near_degenerate(far, far + d, far + e));
+  // quality_stats counts them.
+  const SurfaceMesh m = test::icosphere(2).mesh();
+  EXPECT_EQ(quality_stats(m).near_degenerate, 0u);
 }
 
 TEST(MeshConvert, RoundTripKeepsIdsAndAttributes) {

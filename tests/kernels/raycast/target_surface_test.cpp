@@ -1,14 +1,48 @@
-// TargetSurface (Embree): undirected rays, closest points, batch queries, invalid input.
+// EmbreeScene and TargetSurface (Embree): scene set-up, undirected rays, closest points, batch queries,
+// invalid input.
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <limits>
 
+#include "kernels/raycast/embree_scene.hpp"
 #include "kernels/raycast/target_surface.hpp"
 #include "tests/support/test_meshes.hpp"
 
 namespace topotrack {
 namespace {
+
+TEST(EmbreeScene, HitsReportTheTriangleIndex) {
+  const test::Soup s = test::icosphere(3);
+  EmbreeScene scene(s.positions, s.triangles);
+  ASSERT_NE(scene.get(), nullptr);
+  EXPECT_EQ(embree_device(), embree_device());  // one device for the process
+  RTCIntersectContext context;
+  rtcInitIntersectContext(&context);
+  RTCRayHit rh{};
+  rh.ray.org_x = 0.0f;
+  rh.ray.org_y = 0.0f;
+  rh.ray.org_z = 0.0f;
+  rh.ray.dir_x = 0.0f;
+  rh.ray.dir_y = 1.0f;
+  rh.ray.dir_z = 0.0f;
+  rh.ray.tfar = 10.0f;
+  rh.ray.mask = ~0u;
+  rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+  rtcIntersect1(scene.get(), &context, &rh);
+  ASSERT_EQ(rh.hit.geomID, 0u);
+  ASSERT_LT(rh.hit.primID, s.triangles.size());
+  EXPECT_NEAR(rh.ray.tfar, 1.0f, 2e-2f);
+  // Moving hands the scene over.
+  EmbreeScene moved = std::move(scene);
+  EXPECT_EQ(scene.get(), nullptr);
+  EXPECT_NE(moved.get(), nullptr);
+  // An index out of range is invalid input; an empty scene is valid (nothing to hit).
+  std::vector<std::array<Index, 3>> bad = s.triangles;
+  bad[5][1] = Index(s.positions.size());
+  EXPECT_THROW(EmbreeScene(s.positions, bad), InvalidInput);
+  EXPECT_NE(EmbreeScene({}, {}).get(), nullptr);
+}
 
 TEST(TargetSurface, UndirectedRayTakesTheNearerSide) {
   const test::Soup s = test::icosphere(5);

@@ -18,7 +18,17 @@ struct Figures {
   test::AlignmentError unaligned, aligned, projected;
 };
 
-// Environment knobs for comparisons: TOPOTRACK_TEST_CHOLESKY=eigen, TOPOTRACK_TEST_PCG=1.
+// Environment knobs for comparisons: TOPOTRACK_TEST_CHOLESKY=eigen, TOPOTRACK_TEST_DIRECT=1, and
+// TOPOTRACK_TEST_<NAME>=value for the CoarseParams below.
+void env_double(const char* name, double& value) {
+  if (const char* e = std::getenv(name)) value = std::atof(e);
+}
+void env_int(const char* name, int& value) {
+  if (const char* e = std::getenv(name)) value = std::atoi(e);
+}
+
+int last_rounds = 0;  // rounds of the last run_pair
+
 Figures run_pair(const std::string& name, int frame, int gap) {
   test::AlignmentPair pair = test::make_pair(name, frame, gap);
   const TargetSurface target = TargetSurface::from_mesh(pair.target_mesh);
@@ -31,7 +41,17 @@ Figures run_pair(const std::string& name, int frame, int gap) {
   CoarseParams params;
   if (const char* e = std::getenv("TOPOTRACK_TEST_CHOLESKY"); e && std::string(e) == "eigen")
     params.solver = CholeskyBackend::EigenLDLT;
-  if (std::getenv("TOPOTRACK_TEST_PCG")) params.linear_solver = CoarseLinearSolver::SeparablePCG;
+  if (std::getenv("TOPOTRACK_TEST_DIRECT")) params.linear_solver = CoarseLinearSolver::Direct;
+  env_double("TOPOTRACK_TEST_PCG_TOLERANCE", params.pcg_tolerance);
+  env_double("TOPOTRACK_TEST_STEP_TOLERANCE", params.step_tolerance);
+  env_double("TOPOTRACK_TEST_FIT_TOLERANCE", params.fit_tolerance);
+  env_double("TOPOTRACK_TEST_CONVERGENCE_TOLERANCE", params.convergence_tolerance);
+  env_double("TOPOTRACK_TEST_ALPHA_REG_START", params.alpha_reg_start);
+  env_double("TOPOTRACK_TEST_ALPHA_REG_MIN", params.alpha_reg_min);
+  env_double("TOPOTRACK_TEST_MAX_CLOSEST_RATIO", params.max_closest_ratio);
+  env_double("TOPOTRACK_TEST_MAX_NORMAL_ANGLE", params.max_normal_angle_deg);
+  env_int("TOPOTRACK_TEST_MAX_ITERATIONS", params.max_iterations);
+  env_int("TOPOTRACK_TEST_MAX_PER_LEVEL", params.max_iterations_per_level);
   const CoarseReport c = align_coarse(mesh, target, params);
   const FineReport fr = align_fine(mesh, target);
   f.aligned = test::alignment_error(mesh, pair.truth, target, pair.diagonal);
@@ -40,12 +60,18 @@ Figures run_pair(const std::string& name, int frame, int gap) {
               c.seconds_graph, c.seconds_correspondences, c.seconds_assembly, c.seconds_factorisation,
               c.seconds_solve, c.pcg_iterations, c.factorisations, c.graph_edges, c.correspondences, c.pruned_no_hit, c.pruned_normal,
               c.pruned_distance, fr.correspondences, fr.pruned);
-  std::printf("%s %d->%d: %d nodes %d rounds alpha_reg %g, fine %d cg; truth error %% of diag: unaligned %.4f "
+  std::printf("%s %d->%d: %d nodes %d rounds %d levels alpha_reg %g, fine %d cg; truth error %% of diag: unaligned %.4f "
               "projection %.4f aligned %.4f; distance to target: projection %.5f aligned %.5f; %.3f s coarse, "
               "%.3f s fine\n",
-              name.c_str(), frame, frame + gap, c.nodes, c.iterations, c.alpha_reg_end, fr.cg_iterations,
+              name.c_str(), frame, frame + gap, c.nodes, c.iterations, c.levels, c.alpha_reg_end, fr.cg_iterations,
               100 * f.unaligned.mean_truth, 100 * f.projected.mean_truth, 100 * f.aligned.mean_truth,
               100 * f.projected.mean_target, 100 * f.aligned.mean_target, c.seconds_total, fr.seconds_total);
+  if (std::getenv("TOPOTRACK_TEST_HISTORY")) {
+    std::printf("  energy per round:");
+    for (double e : c.energy_history) std::printf(" %.3g", e);
+    std::printf("\n  mean node fit distance %.4f mean edge lengths\n", c.mean_fit_distance / mean_edge_length(pair.source));
+  }
+  last_rounds = c.iterations;
   return f;
 }
 
@@ -70,7 +96,17 @@ TEST(RealData, SambaLargeMotion) {
 }
 TEST(RealData, PcowLargeMotion) {
   TOPOTRACK_REQUIRE_DATA("pcow");
-  expect_improvement(run_pair("pcow", 1, 15), 0.95);
+  // Measured 16.5% of 26.7%; 9.0% with TOPOTRACK_TEST_MAX_PER_LEVEL=30 TOPOTRACK_TEST_MAX_ITERATIONS=100.
+  expect_improvement(run_pair("pcow", 1, 15), 0.8);
+}
+// The tracker's case: consecutive frames. The absolute convergence tests (step_tolerance,
+// fit_tolerance) end the alpha_reg schedule early once nothing is left to fit.
+TEST(RealData, SambaConsecutiveFrames) {
+  TOPOTRACK_REQUIRE_DATA("samba");
+  const Figures f = run_pair("samba", 1, 1);
+  EXPECT_LE(f.aligned.mean_truth, f.unaligned.mean_truth);
+  EXPECT_LE(f.aligned.mean_target, 0.001);
+  EXPECT_LE(last_rounds, 6);  // measured 3 (12 with the full alpha_reg schedule)
 }
 TEST(RealData, ElephantLargeMotion) {
   TOPOTRACK_REQUIRE_DATA("elephant");

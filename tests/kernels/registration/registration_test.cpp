@@ -210,6 +210,23 @@ TEST(Alignment, ComponentsWithoutCounterpartStayFinite) {
   mesh.validate();
 }
 
+TEST(Alignment, AlignedInputStopsAfterTheFirstLevel) {
+  // Source and target the same surface (different sampling): nothing to fit, so the schedule ends
+  // once the first level has converged; with fit_tolerance 0 it runs down to alpha_reg_min.
+  Case c = make_case([](const Vec3& p) { return p; });
+  SurfaceMesh full = c.source.clone();
+  const CoarseReport early = align_coarse(c.source, c.target);
+  EXPECT_EQ(early.levels, 1);
+  EXPECT_LE(early.iterations, 3);
+  EXPECT_LT(early.mean_fit_distance, 0.05 * mean_edge_length(c.source));
+  CoarseParams p;
+  p.fit_tolerance = 0;
+  const CoarseReport all = align_coarse(full, c.target, p);
+  EXPECT_EQ(all.levels, 5);
+  EXPECT_DOUBLE_EQ(all.alpha_reg_end, 0.1);
+  EXPECT_LT(mean_error(c.source, c.truth), 0.002 * c.target.bbox_diagonal());
+}
+
 TEST(Alignment, GraphDensityPreview) {
   Case c = make_case([](const Vec3& p) { return Vec3(p + Vec3(0.05, 0.02, 0)); });
   SurfaceMesh quarter = c.source.clone();
@@ -229,6 +246,12 @@ TEST(Alignment, BadParametersThrow) {
   FineParams f;
   f.sigma = -1;
   EXPECT_THROW(align_fine(c.source, c.target, f), InvalidInput);
+  p = CoarseParams{};
+  p.step_tolerance = -1;
+  EXPECT_THROW(align_coarse(c.source, c.target, p), InvalidInput);
+  p = CoarseParams{};
+  p.fit_tolerance = std::nan("");
+  EXPECT_THROW(align_coarse(c.source, c.target, p), InvalidInput);
   SurfaceMesh empty;
   EXPECT_THROW(align_coarse(empty, c.target), InvalidInput);
 }

@@ -10,6 +10,7 @@
 #include "kernels/render/camera.hpp"
 #include "kernels/render/png.hpp"
 #include "kernels/render/raytracer.hpp"
+#include "kernels/render/render_mesh.hpp"
 #include "tests/support/test_meshes.hpp"
 
 namespace topotrack {
@@ -188,8 +189,56 @@ TEST(Image, ContactSheetAndCompare) {
   EXPECT_EQ(d.max_abs, 3);
   EXPECT_DOUBLE_EQ(d.mean_abs, 3);
   EXPECT_DOUBLE_EQ(d.share_differing, 1);
-  EXPECT_DOUBLE_EQ(compare_images(tiles[1], Image(11, 8, 13), 3).share_differing, 0);
+  EXPECT_DOUBLE_EQ(compare_images(tiles[1], Image(11, 8, 13), {.tolerance = 3, .ignore = std::nullopt}).share_differing, 0);
   EXPECT_THROW(compare_images(tiles[0], tiles[1]), InvalidInput);
+}
+
+TEST(Image, ComparePercentileAndIgnoredBackground) {
+  // 100 pixels: 40 white in both (background), 50 equal grey, 9 differing by 20 in one channel, 1 by 200.
+  Image a(10, 10, 255), b(10, 10, 255);
+  for (int p = 40; p < 100; ++p) {
+    a.rgb[3 * p] = a.rgb[3 * p + 1] = a.rgb[3 * p + 2] = 100;
+    b.rgb[3 * p] = b.rgb[3 * p + 1] = b.rgb[3 * p + 2] = 100;
+  }
+  for (int p = 90; p < 99; ++p) b.rgb[3 * p + 1] = 120;
+  b.rgb[3 * 99] = 255;
+  b.rgb[3 * 99 + 1] = 255;  // white in one image only: compared
+  b.rgb[3 * 99 + 2] = 255;
+  const ImageDifference all = compare_images(a, b, {.tolerance = 5, .ignore = std::nullopt});
+  EXPECT_EQ(all.pixels_compared, 100u);
+  EXPECT_EQ(all.pixel_p95, 20);
+  EXPECT_EQ(all.max_abs, 155);
+  EXPECT_DOUBLE_EQ(all.share_differing, 0.10);
+  EXPECT_DOUBLE_EQ(all.pixel_mean, (9 * 20 + 155) / 100.0);
+  const ImageDifference fg = compare_images(a, b, {.tolerance = 5, .ignore = std::array<std::uint8_t, 3>{255, 255, 255}});
+  EXPECT_EQ(fg.pixels_compared, 60u);
+  EXPECT_DOUBLE_EQ(fg.share_differing, 10 / 60.0);
+  EXPECT_EQ(fg.pixel_p95, 20);   // the 57th of 60 sorted differences
+  EXPECT_DOUBLE_EQ(fg.mean_abs, (9 * 20 + 3 * 155) / (3 * 60.0));
+  const ImageDifference none = compare_images(Image(4, 4, 255), Image(4, 4, 255), {.ignore = std::array<std::uint8_t, 3>{255, 255, 255}});
+  EXPECT_EQ(none.pixels_compared, 0u);
+  EXPECT_EQ(none.share_differing, 0);
+}
+
+TEST(RenderMesh, FromMeshData) {
+  MeshData d;
+  d.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+  d.triangles = {{0, 1, 2}};
+  d.attributes.push_back({"color", 4, {1, 0, 0, 1, 0, 1, 0, 1, 0, 0, 1, 1}});
+  const RenderMesh r = to_render_mesh(d);
+  EXPECT_EQ(r.colors, (std::vector<float>{1, 0, 0, 0, 1, 0, 0, 0, 1}));
+  EXPECT_EQ(r.triangles[0][2], 2u);
+  EXPECT_TRUE(to_render_mesh(d, "missing").colors.empty());
+  MeshData bad = d;
+  bad.attributes[0].width = 2;
+  bad.attributes[0].values.resize(6);
+  EXPECT_THROW(to_render_mesh(bad), InvalidInput);
+  bad = d;
+  bad.triangles[0][1] = -1;
+  EXPECT_THROW(to_render_mesh(bad), InvalidInput);
+  bad = d;
+  bad.triangles[0][1] = 3;
+  EXPECT_THROW(to_render_mesh(bad), InvalidInput);
 }
 
 }  // namespace

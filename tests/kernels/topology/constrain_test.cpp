@@ -15,6 +15,7 @@
 #include "kernels/propagate/propagate.hpp"
 #include "kernels/sdf/marching_cubes.hpp"
 #include "kernels/sdf/signed_distance.hpp"
+#include "kernels/topology/lattice_cut.hpp"
 #include "tests/kernels/topology/self_intersection.hpp"
 #include "tests/support/test_meshes.hpp"
 
@@ -219,9 +220,10 @@ TEST(ConstrainTopology, EventsPropagateAffineFieldsExactlyAtCutsAndConstantsEver
     const std::size_t i = row.at(m.id(Vertex(v)));
     EXPECT_NEAR(carried(Vertex(v), 0), after.values[2 * i], 1e-5);
     EXPECT_NEAR(carried(Vertex(v), 1), after.values[2 * i + 1], 1e-5);
-    exact += std::abs(after.values[2 * i + 1] - m.position(Vertex(v)).x()) < 1e-4;
+    exact += std::abs(after.values[2 * i + 1] - m.position(Vertex(v)).x()) < topology::kSnap * h + 1e-5;
   }
-  // Kept vertices and the cut points (linear interpolation) reproduce x exactly.
+  // Kept vertices and the cut points (linear interpolation) reproduce x exactly, up to the move of the
+  // vertices next to lattice planes (at most kSnap voxels, see lattice_cut.hpp).
   EXPECT_GE(exact, m.n_vertices() - r.vertices_added + (r.vertices_added > 0 ? 1 : 0));
   // Backward: the removed vertices get values from the kept ones around them.
   const IdField back = propagate_backward(ev, after, &pr);
@@ -259,8 +261,20 @@ TEST(ConstrainTopology, ThrowsOnBadInput) {
   EXPECT_THROW(constrain_topology(ok, *theta, p), InvalidInput);
 }
 
+// The smallest triangle area over the mean (slivers: a marching-cubes vertex next to a lattice corner).
+double min_area_ratio(const SurfaceMesh& m) {
+  double sum = 0, lo = std::numeric_limits<double>::infinity();
+  for (Index i = 0; i < m.faces_size(); ++i) {
+    if (m.is_deleted(Face(i))) continue;
+    const double a = face_area(m, Face(i));
+    sum += a;
+    lo = std::min(lo, a);
+  }
+  return m.n_faces() ? lo / (sum / double(m.n_faces())) : 1.0;
+}
+
 // Every frame of `gen morph` and `gen metaballs` constrained to the next frame takes that frame's number of
-// components and Euler characteristic, and stays sound.
+// components and Euler characteristic, stays sound and has no near-zero-area triangle (§4.3 patches).
 void check_sequence(SyntheticKind kind, int frames) {
   SyntheticParams sp;
   sp.kind = kind;
@@ -278,6 +292,15 @@ void check_sequence(SyntheticKind kind, int frames) {
     EXPECT_EQ(connected_components(m), connected_components(next));
     EXPECT_EQ(euler_characteristic(m), euler_characteristic(next));
     EXPECT_EQ(test::count_self_intersections(m), 0u);
+    // Slivers: the patch keeps its vertices kSnap off the lattice nodes, M's vertices are pushed kSnap off
+    // the planes and tiny pieces of M are absorbed into the patch (lattice_cut.hpp, replace.hpp). Before,
+    // frames of this kind (M's vertices on Θ's own lattice lines, the hardest case for exact cutting) had
+    // triangles down to 1e-13 of the mean area. What is left (one frame, ~1e-8): corners of M's pieces where
+    // an edge of M passes within ~1e-4 voxel of a lattice line, and patch triangles cutting off a lattice node
+    // that M passes as closely; 1e-6 is not reached for these yet.
+    if (r.complex_cells > 0) {
+      EXPECT_GE(min_area_ratio(m), 1e-8);
+    }
   }
   EXPECT_GT(changed, 0u);
 }

@@ -1,5 +1,5 @@
-// Tests of the §5 applications' building blocks: pattern sources, image projection, propagation round trip
-// (§4.6), the PC2 point cache and connectivity matching, frame geometry from MeshData.
+// Tests of what the §5 applications carry along a sequence: pattern sources, image projection, propagation
+// round trip (§4.6), the PC2 point cache, connectivity matching, frame geometry from MeshData.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -9,12 +9,15 @@
 #include "io/error.hpp"
 #include "io/mapped_file.hpp"
 #include "io/mesh_data.hpp"
+#include "io/ply_writer.hpp"
 #include "kernels/improve/improve.hpp"
 #include "kernels/mesh/mesh_convert.hpp"
 #include "kernels/propagate/propagate.hpp"
-#include "kernels/render/frame_geometry.hpp"
-#include "kernels/render/patterns.hpp"
-#include "kernels/render/pc2.hpp"
+#include "kernels/propagate/frame_geometry.hpp"
+#include "kernels/propagate/image_projection.hpp"
+#include "kernels/propagate/patterns.hpp"
+#include "io/pc2.hpp"
+#include "kernels/propagate/tracked_sequence.hpp"
 #include "tests/support/test_meshes.hpp"
 
 namespace topotrack {
@@ -138,6 +141,63 @@ TEST(Propagation, ForwardBackwardRoundTripOfSmoothField) {
   EXPECT_LT(mean_err, 0.25 * grad_l);
 }
 
+// §4.6 round trip over a sequence: frame 0 {0, 1, 2} -> frame 1 by a split of 0-1 and a collapse of 1-2.
+TEST(Propagation, SequenceRoundTripReport) {
+  std::vector<EventList> events(3);
+  events[1].record_split(0, 1, 3, 0.5);
+  events[1].record_collapse(1, 2, 4);
+  IdField start;
+  start.ids = {0, 1, 2};
+  start.values = {0, 1, 4};
+  auto events_of = [&](std::size_t k) { return events.at(k); };
+  const RoundTripReport r = round_trip(2, 0, start, events_of);
+  EXPECT_EQ(r.values, 3u);
+  EXPECT_EQ(r.missing, 0u);
+  EXPECT_DOUBLE_EQ(r.range, 4);
+  // Forward 4 <- (1 + 4) / 2; backward both ends of the collapse take 2.5; vertex 0 is untouched.
+  EXPECT_DOUBLE_EQ(r.max_abs, 1.5);
+  EXPECT_DOUBLE_EQ(r.mean_abs, 1.0);
+  EXPECT_DOUBLE_EQ(r.rms, std::sqrt(1.5));
+  // From the last frame the round trip is empty (nothing to carry): exact.
+  IdField end;
+  end.ids = {0, 3, 4};
+  end.values = {1, 2, 3};
+  EXPECT_EQ(round_trip(2, 1, end, events_of).max_abs, 0);
+  // Frame 2 has no events: the same result through one more frame.
+  EXPECT_DOUBLE_EQ(round_trip(3, 0, start, events_of).mean_abs, 1.0);
+  EXPECT_THROW(round_trip(2, 2, start, events_of), InvalidInput);
+}
+
+// Reading frames: the file is named in every error; a frame without ids is rejected where ids are needed.
+TEST(FrameGeometry, LoadFrame) {
+  const auto dir = std::filesystem::temp_directory_path() / "topotrack_load_frame_test";
+  std::filesystem::create_directories(dir);
+  MeshData d;
+  d.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+  d.triangles = {{0, 1, 2}};
+  write_ply(dir / "plain.ply", d);
+  d.ids = std::vector<std::int64_t>{5, 6, 7};
+  write_ply(dir / "tracked.ply", d);
+  EXPECT_EQ(load_frame(dir / "tracked.ply", true).geometry.ids, (std::vector<VertexId>{5, 6, 7}));
+  EXPECT_TRUE(load_frame(dir / "plain.ply", false).geometry.ids.empty());
+  try {
+    load_frame(dir / "plain.ply", true);
+    ADD_FAILURE() << "no exception";
+  } catch (const InvalidInput& e) {
+    EXPECT_NE(std::string(e.what()).find("plain.ply: no vertex ids"), std::string::npos) << e.what();
+  }
+  d.ids = std::vector<std::int64_t>{5, 5, 7};
+  write_ply(dir / "repeated.ply", d);
+  try {
+    load_frame(dir / "repeated.ply", true);
+    ADD_FAILURE() << "no exception";
+  } catch (const InvalidInput& e) {
+    EXPECT_NE(std::string(e.what()).find("repeated.ply: vertex id 5 appears twice"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(load_frame(dir / "missing.ply", true), Error);
+  std::filesystem::remove_all(dir);
+}
+
 TEST(Pc2, FileLayoutReadsBack) {
   const auto dir = std::filesystem::temp_directory_path() / "topotrack_pc2_test";
   std::filesystem::create_directories(dir);
@@ -145,10 +205,10 @@ TEST(Pc2, FileLayoutReadsBack) {
   const Pc2Header h{.points = 3, .start_frame = 5, .sample_rate = 1, .samples = 2};
   {
     Pc2Writer w(path, h);
-    const std::vector<Vec3> a = {Vec3(0, 1, 2), Vec3(3, 4, 5), Vec3(6, 7, 8)};
-    const std::vector<Vec3> b = {Vec3(-1, -2, -3), Vec3(0.5, 0.25, 0.125), Vec3(9, 9, 9)};
+    const std::vector<std::array<double, 3>> a = {{0, 1, 2}, {3, 4, 5}, {6, 7, 8}};
+    const std::vector<std::array<double, 3>> b = {{-1, -2, -3}, {0.5, 0.25, 0.125}, {9, 9, 9}};
     w.add_sample(a);
-    EXPECT_THROW(w.add_sample(std::vector<Vec3>(2)), InvalidInput);
+    EXPECT_THROW(w.add_sample(std::vector<std::array<double, 3>>(2)), InvalidInput);
     w.add_sample(b);
     EXPECT_THROW(w.add_sample(a), InvalidInput);
     w.commit();
@@ -234,8 +294,9 @@ TEST(FrameGeometry, FromMeshData) {
   d.attributes.push_back({"color", 4, {1, 0, 0, 1, 0, 1, 0, 1, 0, 0, 1, 1}});
   const FrameGeometry g = frame_geometry(d);
   EXPECT_EQ(g.ids, (std::vector<VertexId>{7, 3, 9}));
-  const RenderMesh r = to_render_mesh(d);
-  EXPECT_EQ(r.colors, (std::vector<float>{1, 0, 0, 0, 1, 0, 0, 0, 1}));
+  set_positions(d, std::vector<Vec3>{Vec3(1, 2, 3), Vec3(0, 0, 0), Vec3(0, 1, 0)});
+  EXPECT_EQ(d.positions[0][2], 3.0);
+  EXPECT_THROW(set_positions(d, std::vector<Vec3>(2)), InvalidInput);
   set_attribute(d, "height", 1, {1, 2, 3});
   set_attribute(d, "height", 1, {4, 5, 6});
   EXPECT_EQ(d.attribute("height")->values[2], 6.0f);
@@ -246,10 +307,6 @@ TEST(FrameGeometry, FromMeshData) {
   bad = d;
   (*bad.ids)[1] = 7;
   EXPECT_THROW(frame_geometry(bad), InvalidInput);
-  bad = d;
-  bad.attributes[0].width = 2;
-  bad.attributes[0].values.resize(6);
-  EXPECT_THROW(to_render_mesh(bad), InvalidInput);
 }
 
 }  // namespace

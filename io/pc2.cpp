@@ -1,9 +1,7 @@
-#include "kernels/render/pc2.hpp"
+#include "io/pc2.hpp"
 
-#include <algorithm>
 #include <bit>
 #include <cstring>
-#include <unordered_map>
 
 #include "io/atomic_file.hpp"
 #include "io/error.hpp"
@@ -46,7 +44,7 @@ Pc2Writer::Pc2Writer(const std::filesystem::path& path, const Pc2Header& header)
 
 Pc2Writer::~Pc2Writer() = default;
 
-void Pc2Writer::add_sample(std::span<const Vec3> positions) {
+void Pc2Writer::add_sample(std::span<const std::array<double, 3>> positions) {
   if (positions.size() != std::size_t(header_.points))
     TT_THROW(InvalidInput, out_->target().string() << ": PC2 sample " << written_ << " has " << positions.size()
                                                    << " points, expected " << header_.points);
@@ -91,56 +89,6 @@ Pc2Data decode_pc2(std::string_view bytes, const std::string& name) {
 Pc2Data read_pc2(const std::filesystem::path& path) {
   const MappedFile f(path);
   return decode_pc2(f.text(), path.string());
-}
-
-std::optional<std::vector<Index>> match_connectivity(std::span<const VertexId> ids_a,
-                                                     std::span<const std::array<Index, 3>> triangles_a,
-                                                     std::span<const VertexId> ids_b,
-                                                     std::span<const std::array<Index, 3>> triangles_b) {
-  if (ids_a.empty() != ids_b.empty() || ids_a.size() != ids_b.size() || triangles_a.size() != triangles_b.size())
-    return std::nullopt;
-  std::vector<Index> a_to_b;
-  if (ids_a.empty()) {
-    // Without ids only identical index triangles (in any order) count; the vertex count is implied by them.
-    Index n = 0;
-    for (const auto& t : triangles_a) n = std::max({n, t[0] + 1, t[1] + 1, t[2] + 1});
-    a_to_b.resize(n);
-    for (Index i = 0; i < n; ++i) a_to_b[i] = i;
-  } else if (std::equal(ids_a.begin(), ids_a.end(), ids_b.begin())) {
-    a_to_b.resize(ids_a.size());
-    for (std::size_t i = 0; i < ids_a.size(); ++i) a_to_b[i] = Index(i);
-  } else {
-    std::unordered_map<VertexId, Index> in_b;
-    in_b.reserve(ids_b.size());
-    for (std::size_t i = 0; i < ids_b.size(); ++i) in_b.emplace(ids_b[i], Index(i));
-    if (in_b.size() != ids_b.size()) return std::nullopt;  // repeated ids
-    a_to_b.resize(ids_a.size());
-    std::vector<std::uint8_t> used(ids_b.size(), 0);
-    for (std::size_t i = 0; i < ids_a.size(); ++i) {
-      const auto it = in_b.find(ids_a[i]);
-      if (it == in_b.end() || used[it->second]) return std::nullopt;
-      used[it->second] = 1;
-      a_to_b[i] = it->second;
-    }
-  }
-  // Canonical triangles: rotated so the smallest index comes first (orientation kept), then sorted.
-  auto canon = [](std::array<Index, 3> t) {
-    while (t[0] > t[1] || t[0] > t[2]) t = {t[1], t[2], t[0]};
-    return t;
-  };
-  std::vector<std::array<Index, 3>> ta, tb;
-  ta.reserve(triangles_a.size());
-  tb.reserve(triangles_b.size());
-  for (const auto& t : triangles_a) {
-    for (Index v : t)
-      if (v >= a_to_b.size()) return std::nullopt;
-    ta.push_back(canon({a_to_b[t[0]], a_to_b[t[1]], a_to_b[t[2]]}));
-  }
-  for (const auto& t : triangles_b) tb.push_back(canon(t));
-  std::sort(ta.begin(), ta.end());
-  std::sort(tb.begin(), tb.end());
-  if (ta != tb) return std::nullopt;
-  return a_to_b;
 }
 
 }  // namespace topotrack

@@ -1,12 +1,12 @@
 #pragma once
-//! Sources of per-vertex data to propagate (§4.6, §5 colour and displacement maps): procedural patterns in
-//! space (3D checkerboard, stripes, a sine wave, a constant) and an image projected onto a frame.
+//! Procedural sources of per-vertex data to propagate (§4.6, §5 colour and displacement maps): patterns in
+//! space (3D checkerboard, stripes, a sine wave, a constant), and the blend of two fields (§5 morph).
+//! An image projected onto a frame is the other source: kernels/propagate/image_projection.hpp.
 #include <span>
 #include <string>
 #include <vector>
 
-#include "kernels/render/camera.hpp"
-#include "kernels/render/image.hpp"
+#include "kernels/mesh/mesh_queries.hpp"
 
 namespace topotrack {
 
@@ -29,13 +29,6 @@ std::vector<float> evaluate_pattern(std::span<const Vec3> positions, const Patte
 
 //! Parse "checker", "stripes", "sine", "constant". \throw InvalidInput otherwise.
 PatternKind parse_pattern_kind(const std::string& name);
-
-//! Project `image` through `camera` (aspect = image aspect) onto the positions like a slide projector: each
-//! vertex gets the bilinearly sampled colour (RGB in [0,1]) of the pixel it projects to, `outside` when it
-//! projects outside the image or behind the camera. `outside_count`, when given, receives how many did.
-//! \throw InvalidInput for an empty image or `outside` not of size 3.
-std::vector<float> project_image(std::span<const Vec3> positions, const Image& image, const Camera& camera,
-                                 std::span<const float> outside, std::size_t* outside_count = nullptr);
 
 //! Linear blend (1 - t) a + t b of two fields of the same size (the morph of §5 blends forward- and
 //! backward-propagated colours this way). \throw InvalidInput on different sizes.

@@ -2,20 +2,19 @@
 //! Export for hosts that demand a fixed vertex count: stretches of frames with constant connectivity become a
 //! base mesh plus a PC2 point cache (Blender's Mesh Cache modifier, 3ds Max, Maya read it).
 //!
+//! Bytes <-> flat arrays only (positions as MeshData holds them).
+//!
 //! PC2 layout (little endian): char[12] "POINTCACHE2\0", int32 version = 1, int32 number of points,
 //! float32 start frame, float32 sample rate, int32 number of samples, then per sample per point float32 x y z.
 #include <array>
 #include <cstdint>
 #include <filesystem>
 #include <memory>
-#include <optional>
 #include <span>
 #include <string>
 #include <string_view>
 #include <vector>
 
-#include "io/event_list.hpp"
-#include "kernels/mesh/surface_mesh.hpp"
 
 namespace topotrack {
 
@@ -38,7 +37,7 @@ public:
   Pc2Writer(const Pc2Writer&) = delete;
   Pc2Writer& operator=(const Pc2Writer&) = delete;
   //! Append one sample. \throw InvalidInput on a wrong point count or one sample too many; IoError.
-  void add_sample(std::span<const Vec3> positions);
+  void add_sample(std::span<const std::array<double, 3>> positions);
   //! \throw InvalidInput when fewer samples than announced were added; IoError.
   void commit();
 
@@ -60,13 +59,5 @@ struct Pc2Data {
 Pc2Data decode_pc2(std::string_view bytes, const std::string& name);
 //! \throw IoError when unreadable; InvalidInput as decode_pc2, naming the path.
 Pc2Data read_pc2(const std::filesystem::path& path);
-
-//! When frame b has the connectivity of frame a — the same vertex ids (or, without ids, the same vertex
-//! count) and the same triangles up to triangle order and rotation — the index in b of each vertex of a;
-//! otherwise nullopt. Empty id spans mean "no ids" (vertices matched by index).
-std::optional<std::vector<Index>> match_connectivity(std::span<const VertexId> ids_a,
-                                                     std::span<const std::array<Index, 3>> triangles_a,
-                                                     std::span<const VertexId> ids_b,
-                                                     std::span<const std::array<Index, 3>> triangles_b);
 
 }  // namespace topotrack

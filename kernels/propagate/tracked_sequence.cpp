@@ -1,6 +1,8 @@
-#include "kernels/render/tracked_sequence.hpp"
+#include "kernels/propagate/tracked_sequence.hpp"
 
+#include <algorithm>
 #include <chrono>
+#include <cmath>
 
 #include "io/error.hpp"
 #include "io/event_file.hpp"
@@ -56,6 +58,54 @@ void propagate_sequence(std::size_t count, std::size_t source, bool forward, con
   }
   rep.propagate_seconds = seconds;
   if (report) *report = rep;
+}
+
+RoundTripReport round_trip(std::size_t count, std::size_t source, const IdField& start,
+                           const std::function<EventList(std::size_t)>& events_of) {
+  IdField last;
+  SequencePropagateReport fwd, bwd;
+  propagate_sequence(
+      count, source, true, start, events_of,
+      [&](std::size_t k, const IdTable& table) {
+        if (k + 1 == count) last = table.to_field();
+      },
+      &fwd);
+  IdField back;
+  propagate_sequence(
+      count, count - 1, false, last, events_of,
+      [&](std::size_t k, const IdTable& table) {
+        if (k == source) back = table.to_field();
+      },
+      &bwd);
+  RoundTripReport r;
+  r.forward_seconds = fwd.propagate_seconds;
+  r.backward_seconds = bwd.propagate_seconds;
+  const int w = start.width;
+  if (!start.values.empty()) {
+    const auto [lo, hi] = std::minmax_element(start.values.begin(), start.values.end());
+    r.range = double(*hi) - double(*lo);
+  }
+  const IdTable table = IdTable::from_field(back);
+  double sum = 0, sum2 = 0;
+  for (std::size_t i = 0; i < start.ids.size(); ++i) {
+    const std::span<const float> v = table.get(start.ids[i]);
+    if (v.empty()) {
+      ++r.missing;
+      continue;
+    }
+    for (int c = 0; c < w; ++c) {
+      const double e = std::abs(double(v[c]) - double(start.values[i * w + c]));
+      r.max_abs = std::max(r.max_abs, e);
+      sum += e;
+      sum2 += e * e;
+      ++r.values;
+    }
+  }
+  if (r.values) {
+    r.mean_abs = sum / double(r.values);
+    r.rms = std::sqrt(sum2 / double(r.values));
+  }
+  return r;
 }
 
 }  // namespace topotrack

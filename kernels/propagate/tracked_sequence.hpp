@@ -43,4 +43,18 @@ void propagate_sequence(std::size_t count, std::size_t source, bool forward, con
                         const std::function<void(std::size_t, const IdTable&)>& emit,
                         SequencePropagateReport* report = nullptr);
 
+struct RoundTripReport {
+  std::size_t values = 0;    //!< ids of the source frame compared (times the width: values)
+  std::size_t missing = 0;   //!< source ids with no value after the round trip (left out of the statistics)
+  double range = 0;          //!< max - min of the start values
+  double max_abs = 0, mean_abs = 0, rms = 0;  //!< |back - start| over the values compared
+  double forward_seconds = 0, backward_seconds = 0;
+};
+
+//! The round trip of §4.6: `start` (values on frame `source`) carried forward to the last frame, then backward
+//! to `source`, compared value by value with `start`. \throw InvalidInput for source >= count, plus whatever
+//! events_of throws.
+RoundTripReport round_trip(std::size_t count, std::size_t source, const IdField& start,
+                           const std::function<EventList(std::size_t)>& events_of);
+
 }  // namespace topotrack
