@@ -144,6 +144,11 @@ void run_track(TrackOptions opt) {
   load_params.max_hole_voxels = opt.max_hole;
 
   const fs::path out(opt.out);
+  // Never overwrite the input: the output frames carry the input's name, so OUT may not be the input's folder.
+  for (const InputFrame& f : frames)
+    if (fs::weakly_canonical(out / frame_file(opt, f.number, ".ply")) == fs::weakly_canonical(f.path))
+      TT_THROW(UsageError, opt.out << ": the output would overwrite the input frame " << f.path.string()
+                                   << " (choose another -o or --name)");
   ensure_directory(out);
   const fs::path checkpoint_path = out / "track.checkpoint";
   const fs::path json_path = out / "track.json";
