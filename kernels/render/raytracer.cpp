@@ -11,6 +11,7 @@
 #include <numbers>
 
 #include "io/error.hpp"
+#include "kernels/raycast/embree_scene.hpp"
 
 namespace topotrack {
 
@@ -18,24 +19,9 @@ struct RenderScene::Impl {
   RenderMesh mesh;
   std::vector<float> normals;  // 3 per vertex, area weighted, unit
   BoundingBox bounds;
-  RTCDevice device = nullptr;
-  RTCScene scene = nullptr;
+  EmbreeScene scene;
   double build_seconds = 0;
-
-  ~Impl() {
-    if (scene) rtcReleaseScene(scene);
-    if (device) rtcReleaseDevice(device);
-  }
 };
-
-namespace {
-
-[[noreturn]] void embree_fail(RTCDevice device, const char* what) {
-  const RTCError e = device ? rtcGetDeviceError(device) : rtcGetDeviceError(nullptr);
-  TT_THROW(Error, "Embree: " << what << " failed (error " << int(e) << ")");
-}
-
-}  // namespace
 
 RenderScene::RenderScene(RenderMesh mesh) : impl_(std::make_unique<Impl>()) {
   const auto t0 = std::chrono::steady_clock::now();
@@ -64,33 +50,8 @@ RenderScene::RenderScene(RenderMesh mesh) : impl_(std::make_unique<Impl>()) {
     for (int c = 0; c < 3; ++c) m.normals[3 * i + c] = len > 0 ? float(n[c] / len) : 0.0f;
   }
 
-  m.device = rtcNewDevice(nullptr);
-  if (!m.device) embree_fail(nullptr, "rtcNewDevice");
-  m.scene = rtcNewScene(m.device);
-  if (!m.scene) embree_fail(m.device, "rtcNewScene");
-  rtcSetSceneFlags(m.scene, RTC_SCENE_FLAG_ROBUST);
-  rtcSetSceneBuildQuality(m.scene, RTC_BUILD_QUALITY_MEDIUM);
-  if (!mesh.triangles.empty()) {
-    RTCGeometry geom = rtcNewGeometry(m.device, RTC_GEOMETRY_TYPE_TRIANGLE);
-    if (!geom) embree_fail(m.device, "rtcNewGeometry");
-    auto* vb = static_cast<float*>(
-        rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), nv));
-    auto* ib = static_cast<unsigned*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
-                                                              3 * sizeof(unsigned), mesh.triangles.size()));
-    if (!vb || !ib) {
-      rtcReleaseGeometry(geom);
-      embree_fail(m.device, "rtcSetNewGeometryBuffer");
-    }
-    for (std::size_t i = 0; i < nv; ++i)
-      for (int c = 0; c < 3; ++c) vb[3 * i + c] = float(mesh.positions[i][c]);
-    for (std::size_t f = 0; f < mesh.triangles.size(); ++f)
-      for (int c = 0; c < 3; ++c) ib[3 * f + c] = mesh.triangles[f][c];
-    rtcCommitGeometry(geom);
-    rtcAttachGeometryByID(m.scene, geom, 0);
-    rtcReleaseGeometry(geom);
-  }
-  rtcCommitScene(m.scene);
-  if (rtcGetDeviceError(m.device) != RTC_ERROR_NONE) embree_fail(m.device, "rtcCommitScene");
+  // Medium quality: a picture casts ~10 rays per triangle, worth a better tree than the alignment's.
+  m.scene = EmbreeScene(mesh.positions, mesh.triangles, RTC_BUILD_QUALITY_MEDIUM);
   m.mesh = std::move(mesh);
   m.build_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
@@ -129,7 +90,7 @@ struct Shader {
     rh.ray.flags = 0;
     rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
     rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-    rtcIntersect1(s.scene, &ctx, &rh);
+    rtcIntersect1(s.scene.get(), &ctx, &rh);
     if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) {
       for (int c = 0; c < 3; ++c) rgb[c] = p.background[c];
       return false;
