@@ -40,6 +40,7 @@ std::vector<Binding> bindings(TrackerParams& p) {
       {"improve.max_iterations", &p.improve.max_iterations, 0, 1e6},
       {"improve.enable_flips", &p.improve.enable_flips},
       {"improve.max_surface_deviation", &p.improve.max_surface_deviation, 0, inf},
+      {"improve.max_operation_deviation", &p.improve.max_operation_deviation, 0, inf},
       {"improve.max_flip_bend_deg", &p.improve.max_flip_bend_deg, 0, 180},
       {"coarse.node_spacing_factor", &p.coarse_params.node_spacing_factor, 1e-3, 1e3},
       {"coarse.k", &p.coarse_params.k, 1, 16},

@@ -4,6 +4,7 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <limits>
@@ -29,6 +30,16 @@ constexpr double kDegenerateQuality = kNearDegenerateSin;
 constexpr double kShortCollapseStretch = 1.25;
 // ... and may create an angle below min_angle only above this fraction of it (or better than before).
 constexpr double kShortCollapseAngleFloor = 0.2;
+// An operation that removes a triangle with an angle below this may move the surface twice as far.
+constexpr double kVeryBadAngleDeg = 2.0;
+// A relaxation of a star whose smallest angle is at least kVeryBadAngleDeg must raise that angle at least
+// to kRelaxGainFactor times it plus kRelaxGainMin (in sines): tiny gains would creep on round after round
+// (and on in the next call), moving the surface for nothing.
+constexpr double kRelaxGainFactor = 1.2;
+constexpr double kRelaxGainMin = 1e-3;
+// Above this smallest-angle sine (about 0.57°) a triangle whose edges are long against the float spacing of
+// its coordinates cannot become degenerate by rounding to float.
+constexpr double kRoundingSafeQuality = 1e-2;
 
 template <class F>
 void parallel_over(std::size_t n, F&& f) {
@@ -66,8 +77,11 @@ public:
     lmin2_ = lmin_ * lmin_;
     lmax2_ = lmax_ * lmax_;
     max_dev_ = p_.max_surface_deviation * L;
+    op_dev_ = p_.max_operation_deviation * L;
+    q_very_bad_ = std::sin(kVeryBadAngleDeg * kDegToRad);
     q_min_ = std::sin(p_.min_angle_deg * kDegToRad);
     q_bad_ = std::max(q_min_, kDegenerateQuality);
+    q_bad2_ = q_bad_ * q_bad_;
     q_floor_ = std::sin(kShortCollapseAngleFloor * p_.min_angle_deg * kDegToRad);
     lmax_short2_ = lmax2_ * kShortCollapseStretch * kShortCollapseStretch;
     cos_fold_ = std::cos((180.0 - p_.min_dihedral_deg) * kDegToRad);
@@ -112,23 +126,39 @@ public:
 private:
   const Vec3& pos(Vertex v) const { return m_.position(v); }
   double length2(Edge e) const { return (pos(m_.vertex(e, 0)) - pos(m_.vertex(e, 1))).squaredNorm(); }
+  //! The corners of f in SurfaceMesh::vertices order, inline (the scans call this for every face).
+  std::array<Vertex, 3> corners(Face f) const {
+    const Halfedge h = m_.halfedge(f);
+    return {m_.to_vertex(m_.prev(h)), m_.to_vertex(h), m_.to_vertex(m_.next(h))};
+  }
   Vec3 area_vector(Face f) const {
-    const auto t = m_.vertices(f);
+    const auto t = corners(f);
     return (pos(t[1]) - pos(t[0])).cross(pos(t[2]) - pos(t[0]));
   }
   double quality(Face f) const {
-    const auto t = m_.vertices(f);
+    const auto t = corners(f);
     return triangle_quality(pos(t[0]), pos(t[1]), pos(t[2]));
   }
   //! A live triangle with an angle below min_angle, or degenerate (is_near_degenerate: a tiny triangle of
   //! good shape can still vanish when rounded to float; only one with an edge below L_min is that small).
+  //! triangle_quality < q_bad without its square roots: |e0 x e2|^2 < q_bad^2 * (product of the two
+  //! longest squared edge lengths).
   bool is_bad(Face f) const {
     if (m_.is_deleted(f)) return false;
-    const auto t = m_.vertices(f);
+    const auto t = corners(f);
     const Vec3 &p0 = pos(t[0]), &p1 = pos(t[1]), &p2 = pos(t[2]);
-    if (triangle_quality(p0, p1, p2) < q_bad_) return true;
-    const double l2 = std::min({(p1 - p0).squaredNorm(), (p2 - p1).squaredNorm(), (p0 - p2).squaredNorm()});
-    return l2 < lmin2_ && is_near_degenerate(p0, p1, p2);
+    const Vec3 e0 = p1 - p0, e1 = p2 - p1, e2 = p0 - p2;
+    const double l0 = e0.squaredNorm(), l1 = e1.squaredNorm(), l2 = e2.squaredNorm();
+    const double lmin = std::min({l0, l1, l2});
+    const double prod = (l0 == lmin) ? l1 * l2 : (l1 == lmin ? l0 * l2 : l0 * l1);
+    if (!(prod > 0) || e0.cross(e2).squaredNorm() < q_bad2_ * prod) return true;
+    if (!(lmin < lmin2_)) return false;
+    // Rounding to float moves a corner by at most sqrt(3) 2^-24 |p|_inf: with the shortest edge 1e4 times
+    // longer and the smallest angle above 0.5°, it cannot make the triangle degenerate.
+    const double m = std::max({p0.cwiseAbs().maxCoeff(), p1.cwiseAbs().maxCoeff(), p2.cwiseAbs().maxCoeff()});
+    const double round2 = 3.0 * (m * 0x1p-24) * (m * 0x1p-24);
+    if (q_bad2_ >= kRoundingSafeQuality * kRoundingSafeQuality && lmin > 1e8 * round2) return false;
+    return is_near_degenerate(p0, p1, p2);
   }
   //! Normals more than 180° - min_dihedral apart (degenerate faces have no normal and fold nothing).
   bool normals_fold(const Vec3& n0, const Vec3& n1) const {
@@ -137,6 +167,9 @@ private:
   bool is_fold(Edge e) const {
     return normals_fold(area_vector(m_.face(m_.halfedge(e, 0))), area_vector(m_.face(m_.halfedge(e, 1))));
   }
+  //! How far one operation may move the surface (max_operation_deviation), given the smallest triangle
+  //! quality among the triangles it replaces.
+  double operation_bound(double old_q) const { return old_q < q_very_bad_ ? 2 * op_dev_ : op_dev_; }
   void after_operation() {
     if (p_.validate_each_step) m_.validate();
   }
@@ -145,12 +178,9 @@ private:
   //! Byte flags only, so a survey of a large mesh touches little fresh memory; keys are recomputed for
   //! the few flagged elements when they are collected.
   void measure_face(Index i) { fbad_[i] = is_bad(Face(i)); }
-  void measure_edge(Index i) {
-    const Edge e(i);
-    if (m_.is_deleted(e)) {
-      eflag_[i] = 0;
-      return;
-    }
+  void measure_edge(Index i) { eflag_[i] = edge_flag(Edge(i)); }
+  std::uint8_t edge_flag(Edge e) const {
+    if (m_.is_deleted(e)) return 0;
     const Halfedge h0 = m_.halfedge(e, 0), h1 = m_.halfedge(e, 1);
     const Vec3 &a = pos(m_.to_vertex(h1)), &b = pos(m_.to_vertex(h0));
     const Vec3 &c = pos(m_.to_vertex(m_.next(h0))), &d = pos(m_.to_vertex(m_.next(h1)));
@@ -159,14 +189,13 @@ private:
     std::uint8_t flag = l2 > lmax2_ ? kLong : (l2 < lmin2_ ? kShort : 0);
     // Faces (a, b, c) and (b, a, d).
     if (normals_fold(ab.cross(c - a), (d - a).cross(ab))) flag |= kFold;
-    eflag_[i] = flag;
+    return flag;
   }
   void resize_survey_arrays() {
     fbad_.resize(m_.faces_size());
     eflag_.resize(m_.edges_size());
   }
-  void add_edge_candidate(Survey& s, Index e) const {
-    const std::uint8_t flag = eflag_[e];
+  void add_edge_candidate(Survey& s, Index e, std::uint8_t flag) const {
     if (!flag) return;
     const double l2 = length2(Edge(e));
     if (flag & kLong) s.long_edges.emplace_back(-l2, e);  // longest first
@@ -174,7 +203,7 @@ private:
     if (flag & kFold) s.folds.emplace_back(0.0, e);        // by index
   }
   void add_face_candidate(Survey& s, Index f) const {
-    if (fbad_[f]) s.bad_faces.emplace_back(quality(Face(f)), f);  // worst first
+    s.bad_faces.emplace_back(quality(Face(f)), f);  // worst first
   }
   static void clear_survey(Survey& s) {
     for (Candidates* c : {&s.long_edges, &s.short_edges, &s.bad_faces, &s.folds}) c->clear();
@@ -183,8 +212,8 @@ private:
     for (Candidates* c : {&s.long_edges, &s.short_edges, &s.bad_faces, &s.folds}) std::sort(c->begin(), c->end());
   }
 
-  //! One parallel pass over all faces (normal, quality) and one over all edges (length, fold); the
-  //! candidate lists are collected and sorted serially, so their order never depends on the thread count.
+  //! One parallel pass over all faces (quality) and one over all edges (length, fold); the candidate
+  //! lists are collected and sorted serially, so their order never depends on the thread count.
   void survey_all(Survey& s) {
     clear_survey(s);
     for (const Index v : touched_) vtouched_[v] = 0;
@@ -192,8 +221,9 @@ private:
     resize_survey_arrays();
     parallel_over(m_.faces_size(), [&](std::size_t i) { measure_face(static_cast<Index>(i)); });
     parallel_over(m_.edges_size(), [&](std::size_t i) { measure_edge(static_cast<Index>(i)); });
-    for (Index e = 0; e < m_.edges_size(); ++e) add_edge_candidate(s, e);
-    for (Index f = 0; f < m_.faces_size(); ++f) add_face_candidate(s, f);
+    for (Index e = 0; e < m_.edges_size(); ++e) add_edge_candidate(s, e, eflag_[e]);
+    for (Index f = 0; f < m_.faces_size(); ++f)
+      if (fbad_[f]) add_face_candidate(s, f);
     sort_survey(s);
   }
 
@@ -229,8 +259,9 @@ private:
     touched_.clear();
     parallel_over(local_faces_.size(), [&](std::size_t i) { measure_face(local_faces_[i]); });
     parallel_over(local_edges_.size(), [&](std::size_t i) { measure_edge(local_edges_[i]); });
-    for (const Index e : local_edges_) add_edge_candidate(s, e);
-    for (const Index f : local_faces_) add_face_candidate(s, f);
+    for (const Index e : local_edges_) add_edge_candidate(s, e, eflag_[e]);
+    for (const Index f : local_faces_)
+      if (fbad_[f]) add_face_candidate(s, f);
     sort_survey(s);
   }
 
@@ -275,6 +306,7 @@ private:
     Vertex v, w1, w2;
     Halfedge outer;  // w2 -> w1, in the unchanged face across (w1, w2)
     Vec3 n_old, n_new, n_out;  // n_out: of the face across (w1, w2)
+    std::size_t next = 0;      // index in ring_ of the face across the new spoke (p, w2)
   };
 
   //! The sharpest crease (smallest cosine between the normals of neighbouring faces) and the number of
@@ -424,28 +456,32 @@ private:
     // No new fold across the new spokes (p, w2) and the ring edges (w1, w2). Where the neighbourhood is
     // creased already (thin sheets and tubes a few voxels across) a collapse may go if it neither makes
     // the sharpest crease sharper nor adds a fold; a fold collapse must leave none.
-    double new_worst = 1;
     int new_folds = 0;
-    for (RingFace& r : ring_) {
-      for (const RingFace& s : ring_)
-        if (s.w1 == r.w2) {
-          const double c = normal_cos(r.n_new, s.n_new);
-          new_worst = std::min(new_worst, c);
-          new_folds += c < cos_fold_;
-        }
+    const std::size_t n_ring = ring_.size();
+    for (std::size_t i = 0; i < n_ring; ++i) {
+      RingFace& r = ring_[i];
+      // The face across the new spoke (p, w2): the next one around the same end point, except where the
+      // two fans meet.
+      r.next = i + 1 < n_ring && ring_[i + 1].w1 == r.w2 ? i + 1 : n_ring;
+      for (std::size_t j = 0; r.next == n_ring && j < n_ring; ++j)
+        if (ring_[j].w1 == r.w2) r.next = j;
       const Vertex x = m_.to_vertex(m_.next(r.outer));
       r.n_out = (pos(r.w1) - pos(r.w2)).cross(pos(x) - pos(r.w2));
-      const double c = normal_cos(r.n_new, r.n_out);
-      new_worst = std::min(new_worst, c);
-      new_folds += c < cos_fold_;
+      if (r.next < n_ring) new_folds += normals_fold(r.n_new, ring_[r.next].n_new);
+      new_folds += normals_fold(r.n_new, r.n_out);
     }
-    if (new_worst < cos_fold_) {
+    if (new_folds > 0) {
       if (mode == CollapseMode::Fold) return false;
+      double new_worst = 1;
+      for (const RingFace& r : ring_) {
+        if (r.next < n_ring) new_worst = std::min(new_worst, normal_cos(r.n_new, ring_[r.next].n_new));
+        new_worst = std::min(new_worst, normal_cos(r.n_new, r.n_out));
+      }
       const auto [old_worst, old_folds] = creases_before_collapse(a, b);
       if (new_worst < old_worst || new_folds > old_folds) return false;
     }
     const double dev_new = std::max(dev_[a.idx], dev_[b.idx]) + dev_local;
-    if (mode != CollapseMode::Fold && dev_new > max_dev_) return false;
+    if (mode != CollapseMode::Fold && (dev_local > operation_bound(old_q) || dev_new > max_dev_)) return false;
     const VertexId k = m_.take_fresh_id();
     if (events_) events_->record_collapse(m_.id(a), m_.id(b), k);
     m_.collapse(h, p);
@@ -527,9 +563,9 @@ private:
       const Halfedge o = SurfaceMesh::opposite(outer[k]);
       if (normals_fold(*new_normal[k], area_vector(m_.face(o)))) return false;
     }
-    const double dev_new =
-        std::max({dev_[a.idx], dev_[b.idx], dev_[c.idx], dev_[d.idx]}) + segment_distance(pa, pb, pc, pd);
-    if (dev_new > max_dev_) return false;
+    const double dev_local = segment_distance(pa, pb, pc, pd);
+    const double dev_new = std::max({dev_[a.idx], dev_[b.idx], dev_[c.idx], dev_[d.idx]}) + dev_local;
+    if (dev_local > operation_bound(old_q) || dev_new > max_dev_) return false;
     m_.flip(e);
     for (const Vertex v : {a, b, c, d}) {
       dev_[v.idx] = std::max(dev_[v.idx], dev_new);
@@ -594,8 +630,12 @@ private:
       }
       // The whole step counts against the movement bound: across a crease or off the end of a sliver the
       // tangent plane is not the surface, so distances to the face planes would underestimate the move.
-      const double dev_new = dev_[v.idx] + t * d.norm();
-      if (!ok || !(new_q > old_q) || !(new_q > kDegenerateQuality) || dev_new > max_dev_) continue;
+      const double dev_local = t * d.norm(), dev_new = dev_[v.idx] + dev_local;
+      // Around a triangle below 2° any gain counts; above, only a clear one (no creeping on).
+      const double gain_floor = old_q < q_very_bad_ ? old_q : kRelaxGainFactor * old_q + kRelaxGainMin;
+      if (!ok || !(new_q > gain_floor) || !(new_q > kDegenerateQuality) ||
+          dev_local > operation_bound(old_q) || dev_new > max_dev_)
+        continue;
       double old_worst = 1, new_worst = 1;
       int old_folds = 0, new_folds = 0;
       // A degenerate triangle had no normal: the crease it shows once it has one is no new fold (the fold
@@ -707,8 +747,8 @@ private:
   EventList* events_;
   ImproveReport& rep_;
   double lmax_short2_ = 0;
-  double lmin_ = 0, lmax_ = 0, lmin2_ = 0, lmax2_ = 0, max_dev_ = 0;
-  double q_min_ = 0, q_bad_ = 0, q_floor_ = 0, cos_fold_ = 0, cos_flip_bend_ = 1;
+  double lmin_ = 0, lmax_ = 0, lmin2_ = 0, lmax2_ = 0, max_dev_ = 0, op_dev_ = 0, q_very_bad_ = 0;
+  double q_min_ = 0, q_bad_ = 0, q_bad2_ = 0, q_floor_ = 0, cos_fold_ = 0, cos_flip_bend_ = 1;
   std::vector<double> dev_;  // accumulated bound of the surface movement near each vertex
   std::vector<std::uint8_t> fbad_;  // survey: face with a small angle
   std::vector<std::uint8_t> eflag_;
@@ -732,6 +772,8 @@ void check_params(const ImproveParams& params) {
     TT_THROW(InvalidInput, "improve_mesh: min_dihedral_deg must be in [0, 180), got " << params.min_dihedral_deg);
   if (params.max_iterations < 0)
     TT_THROW(InvalidInput, "improve_mesh: max_iterations must be >= 0, got " << params.max_iterations);
+  if (!(params.max_operation_deviation >= 0))
+    TT_THROW(InvalidInput, "improve_mesh: max_operation_deviation must be >= 0, got " << params.max_operation_deviation);
   if (!(params.max_surface_deviation >= 0))
     TT_THROW(InvalidInput, "improve_mesh: max_surface_deviation must be >= 0, got " << params.max_surface_deviation);
   if (!(params.max_flip_bend_deg >= 0 && params.max_flip_bend_deg <= 180))

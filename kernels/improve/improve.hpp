@@ -22,10 +22,16 @@ struct ImproveParams {
   //! Where no flip or collapse can fix a bad triangle, move one of its corners a little along the surface
   //! (tangential relaxation, within max_surface_deviation; the vertex keeps its id, no event).
   bool enable_relaxation = true;
-  //! Bound on how far the operations of one call may move the surface near a vertex, as a fraction of
-  //! L (accumulated per vertex). Collapses across a dihedral angle below min_dihedral_deg (folds,
-  //! removed on purpose) are exempt.
-  double max_surface_deviation = 0.4;
+  //! Bound on how far one operation (collapse, flip, relaxation) may move the surface, as a fraction of L;
+  //! twice this for an operation that removes a triangle with an angle below 2°. It depends on the mesh
+  //! alone, not on what the call did before, so a second call finds nothing new to do (idempotence: what
+  //! one call refused, the next refuses too). Collapses across a dihedral angle below min_dihedral_deg
+  //! (folds, removed on purpose) are exempt.
+  double max_operation_deviation = 0.2;
+  //! Safety net: bound on the movement of the surface near a vertex accumulated over all the operations
+  //! of one call, as a fraction of L (folds exempt as above). Well above max_operation_deviation, so it
+  //! rarely binds (where it does, a second call may continue).
+  double max_surface_deviation = 0.8;
   //! Flips only across edges whose faces' normals differ by at most this (nearly coplanar).
   double max_flip_bend_deg = 20;
   //! Fill ImproveReport::quality (an extra O(n) pass over the output).

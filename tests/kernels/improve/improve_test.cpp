@@ -339,6 +339,7 @@ TEST(Improve, RejectsBadParameters) {
   bad([](ImproveParams& p) { p.min_dihedral_deg = 180; });
   bad([](ImproveParams& p) { p.max_iterations = -1; });
   bad([](ImproveParams& p) { p.max_surface_deviation = -0.1; });
+  bad([](ImproveParams& p) { p.max_operation_deviation = std::nan(""); });
   bad([](ImproveParams& p) { p.max_flip_bend_deg = 181; });
   bad([](ImproveParams& p) { p.target_edge_length = std::numeric_limits<double>::infinity(); });
 }
