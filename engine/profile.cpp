@@ -58,6 +58,7 @@ std::vector<Binding> bindings(TrackerParams& p) {
       {"coarse.step_tolerance", &p.coarse_params.step_tolerance, 0, inf},
       {"coarse.fit_tolerance", &p.coarse_params.fit_tolerance, 0, inf},
       {"coarse.pcg_tolerance", &p.coarse_params.pcg_tolerance, 0, 1},
+      {"coarse.max_pcg_iterations", &p.coarse_params.max_pcg_iterations, 1, 1e6},
       {"coarse.graph_density", &p.coarse_params.graph_density, 1e-3, 1e3},
       {"fine.sigma", &p.fine_params.sigma, 0, inf},
       {"fine.max_normal_angle_deg", &p.fine_params.max_normal_angle_deg, 0, 180},

@@ -3,10 +3,12 @@
 // closest-point projection of the paper's Fig. 9. OUT keeps SOURCE's vertices, order and ids.
 #include <cstdio>
 #include <initializer_list>
+#include <optional>
 #include <utility>
 #include <iostream>
 #include <nlohmann/json.hpp>
 
+#include "engine/profile.hpp"
 #include "io/obj_writer.hpp"
 #include "kernels/mesh/mesh_convert.hpp"
 #include "kernels/registration/coarse.hpp"
@@ -21,9 +23,20 @@ namespace {
 struct AlignOptions {
   std::string source, target, output;
   bool coarse_only = false, fine_only = false, projection_only = false, json = false;
-  double graph_density = 1;
-  double sigma = 0.1;
+  std::optional<double> graph_density, sigma;  // over the profile's when given
+  std::string profile = "default";
+  std::vector<std::string> settings;
 };
+
+// The coarse and fine parameters of the profile, with --set overrides and the stage options on top.
+TrackerParams align_params(const AlignOptions& opt) {
+  TrackerParams params = load_profile(opt.profile);
+  for (const auto& s : opt.settings) apply_setting(params, s);
+  if (opt.graph_density) params.coarse_params.graph_density = *opt.graph_density;
+  if (opt.sigma) params.fine_params.sigma = *opt.sigma;
+  validate(params);
+  return params;
+}
 
 TargetSurface load_target(const std::string& path) {
   const MeshData data = load_mesh_data(path);
@@ -51,10 +64,17 @@ nlohmann::json stage_json(nlohmann::json figures, std::initializer_list<std::pai
   return figures;
 }
 
-nlohmann::json run_coarse(SurfaceMesh& mesh, const TargetSurface& target, const AlignOptions& opt) {
-  CoarseParams p;
-  p.graph_density = opt.graph_density;
+nlohmann::json run_coarse(SurfaceMesh& mesh, const TargetSurface& target, const CoarseParams& p) {
   const CoarseReport r = align_coarse(mesh, target, p);
+  nlohmann::json rounds = nlohmann::json::array();
+  for (const CoarseRound& c : r.rounds)
+    rounds.push_back({{"alpha_reg", c.alpha_reg},
+                      {"energy_before", c.energy_before},
+                      {"energy", c.energy},
+                      {"motion", c.motion},
+                      {"fit_distance", c.fit_distance},
+                      {"pcg_iterations", c.pcg_iterations},
+                      {"correspondences", c.correspondences}});
   return stage_json({{"nodes", r.nodes},
                      {"graph_edges", r.graph_edges},
                      {"iterations", r.iterations},
@@ -65,7 +85,8 @@ nlohmann::json run_coarse(SurfaceMesh& mesh, const TargetSurface& target, const 
                      {"pruned", {{"no_hit", r.pruned_no_hit}, {"normal", r.pruned_normal}, {"distance", r.pruned_distance}}},
                      {"mean_fit_distance", r.mean_fit_distance},
                      {"energy_start", r.energy_start},
-                     {"energy_end", r.energy_end}},
+                     {"energy_end", r.energy_end},
+                     {"rounds", rounds}},
                     {{"graph", r.seconds_graph},
                      {"correspondences", r.seconds_correspondences},
                      {"assembly", r.seconds_assembly},
@@ -74,9 +95,7 @@ nlohmann::json run_coarse(SurfaceMesh& mesh, const TargetSurface& target, const 
                      {"total", r.seconds_total}});
 }
 
-nlohmann::json run_fine(SurfaceMesh& mesh, const TargetSurface& target, const AlignOptions& opt) {
-  FineParams p;
-  p.sigma = opt.sigma;
+nlohmann::json run_fine(SurfaceMesh& mesh, const TargetSurface& target, const FineParams& p) {
   const FineReport r = align_fine(mesh, target, p);
   return stage_json({{"cg_iterations", r.cg_iterations},
                      {"correspondences", r.correspondences},
@@ -93,6 +112,7 @@ nlohmann::json run_fine(SurfaceMesh& mesh, const TargetSurface& target, const Al
 void run_align(const AlignOptions& opt) {
   if (int(opt.coarse_only) + int(opt.fine_only) + int(opt.projection_only) > 1)
     TT_THROW(UsageError, "align: --coarse-only, --fine-only and --projection-only exclude each other");
+  const TrackerParams params = align_params(opt);
   SurfaceMesh mesh = load_surface_mesh(opt.source);
   const TargetSurface target = load_target(opt.target);
   nlohmann::json j;
@@ -105,8 +125,8 @@ void run_align(const AlignOptions& opt) {
     j["mode"] = "projection";
   } else {
     j["mode"] = opt.coarse_only ? "coarse" : opt.fine_only ? "fine" : "coarse+fine";
-    if (!opt.fine_only) j["coarse"] = run_coarse(mesh, target, opt);
-    if (!opt.coarse_only) j["fine"] = run_fine(mesh, target, opt);
+    if (!opt.fine_only) j["coarse"] = run_coarse(mesh, target, params.coarse_params);
+    if (!opt.coarse_only) j["fine"] = run_fine(mesh, target, params.fine_params);
   }
   const std::filesystem::path out(opt.output);
   if (out.has_parent_path()) ensure_directory(out.parent_path());
@@ -142,7 +162,9 @@ void add_align_command(CLI::App& app) {
       ->check(CLI::Range(1e-3, 1.0));
   sub->add_option("--sigma", opt->sigma, "fine-stage pruning distance, fraction of the bbox diagonal")
       ->check(CLI::PositiveNumber);
-  sub->add_flag("--json", opt->json, "print the stage reports as JSON");
+  sub->add_option("--profile", opt->profile, "bundled profile name or a .json file (default: the paper's values)");
+  sub->add_option("--set", opt->settings, "override one coarse.* or fine.* parameter, e.g. --set coarse.alpha_reg_start=100");
+  sub->add_flag("--json", opt->json, "print the stage reports as JSON (with the coarse rounds)");
   sub->callback([opt] { run_align(*opt); });
 }
 

@@ -446,7 +446,6 @@ CoarseReport align_coarse(SurfaceMesh& mesh, const TargetSurface& target, const 
     }
     assemble(problem, state, corr, w, pattern, direct ? nullptr : &precond, direct ? nullptr : &block_inverse, grad);
     rep.seconds_assembly += seconds_since(t0);
-    Eigen::VectorXd delta;
     if (direct || refactor || params.refactor_each_round) {
       t0 = Clock::now();
       solver.factorize(direct ? pattern.H : precond.H);
@@ -455,10 +454,13 @@ CoarseReport align_coarse(SurfaceMesh& mesh, const TargetSurface& target, const 
       rep.seconds_factorisation += seconds_since(t0);
     }
     t0 = Clock::now();
+    Eigen::VectorXd delta;
+    int pcg_iterations = 0;
     if (direct) delta = solver.solve(Eigen::VectorXd(-grad));
     else
-      rep.pcg_iterations +=
+      pcg_iterations =
           preconditioned_cg(pattern.H, solver, block_inverse, -grad, params.pcg_tolerance, params.max_pcg_iterations, delta);
+    rep.pcg_iterations += pcg_iterations;
     rep.seconds_solve += seconds_since(t0);
 
     // Accept the step, halving it while it raises the energy (the rigidity term is not quadratic).
@@ -492,6 +494,7 @@ CoarseReport align_coarse(SurfaceMesh& mesh, const TargetSurface& target, const 
     rep.seconds_assembly += seconds_since(t0);
     rep.iterations = it + 1;
     rep.energy_history.push_back(after.total);
+    rep.rounds.push_back({alpha_reg, before.total, after.total, motion / edge, fit_distance / edge, pcg_iterations, counts.ok});
     rep.energy_end = after.total;
     rep.fit_end = after.fit;
     rep.alpha_reg_end = alpha_reg;

@@ -19,7 +19,7 @@ struct Figures {
 };
 
 // Environment knobs for comparisons: TOPOTRACK_TEST_CHOLESKY=eigen, TOPOTRACK_TEST_DIRECT=1, and
-// TOPOTRACK_TEST_<NAME>=value for the CoarseParams below.
+// TOPOTRACK_TEST_<NAME>=value for the CoarseParams below (MAX_PCG: max_pcg_iterations).
 void env_double(const char* name, double& value) {
   if (const char* e = std::getenv(name)) value = std::atof(e);
 }
@@ -52,6 +52,7 @@ Figures run_pair(const std::string& name, int frame, int gap) {
   env_double("TOPOTRACK_TEST_MAX_NORMAL_ANGLE", params.max_normal_angle_deg);
   env_int("TOPOTRACK_TEST_MAX_ITERATIONS", params.max_iterations);
   env_int("TOPOTRACK_TEST_MAX_PER_LEVEL", params.max_iterations_per_level);
+  env_int("TOPOTRACK_TEST_MAX_PCG", params.max_pcg_iterations);
   const CoarseReport c = align_coarse(mesh, target, params);
   const FineReport fr = align_fine(mesh, target);
   f.aligned = test::alignment_error(mesh, pair.truth, target, pair.diagonal);
@@ -96,8 +97,9 @@ TEST(RealData, SambaLargeMotion) {
 }
 TEST(RealData, PcowLargeMotion) {
   TOPOTRACK_REQUIRE_DATA("pcow");
-  // Measured 16.5% of 26.7%; 9.0% with TOPOTRACK_TEST_MAX_PER_LEVEL=30 TOPOTRACK_TEST_MAX_ITERATIONS=100.
-  expect_improvement(run_pair("pcow", 1, 15), 0.8);
+  // Measured 13.2-15.8% of 26.7% (the re-sampled target follows improve_mesh), 18.0% with
+  // TOPOTRACK_TEST_MAX_PCG=100 (the former PCG cap) on the same build.
+  expect_improvement(run_pair("pcow", 1, 15), 0.7);
 }
 // The tracker's case: consecutive frames. The absolute convergence tests (step_tolerance,
 // fit_tolerance) end the alpha_reg schedule early once nothing is left to fit.

@@ -180,6 +180,39 @@ TEST(Alignment, EnergiesDecrease) {
   EXPECT_LT(fr.residual, 1e-6);
 }
 
+// The per-round report: one entry per round, alpha_reg relaxed by 10 between levels, each accepted step
+// lowering the energy of its correspondences, and the PCG cap (an inexact Newton step) respected.
+TEST(Alignment, RoundsAreReported) {
+  Case c = make_case([](const Vec3& p) { return Vec3(rotation(20, Vec3(0, 0, 1)) * p + Vec3(0.05, 0, 0)); });
+  CoarseParams p;
+  p.max_pcg_iterations = 4;
+  const double edge = mean_edge_length(c.source);  // the unit of motion and fit_distance
+  const CoarseReport r = align_coarse(c.source, c.target, p);
+  ASSERT_EQ(int(r.rounds.size()), r.iterations);
+  ASSERT_GT(r.iterations, 1);
+  int pcg = 0;
+  for (std::size_t i = 0; i < r.rounds.size(); ++i) {
+    const CoarseRound& k = r.rounds[i];
+    EXPECT_LE(k.energy, k.energy_before) << "round " << i;
+    EXPECT_EQ(k.energy, r.energy_history[i]);
+    EXPECT_GE(k.pcg_iterations, 0);
+    EXPECT_LE(k.pcg_iterations, p.max_pcg_iterations);
+    EXPECT_GE(k.motion, 0);
+    EXPECT_GT(k.correspondences, 0u);
+    pcg += k.pcg_iterations;
+    if (i > 0) {
+      const double ratio = r.rounds[i - 1].alpha_reg / k.alpha_reg;
+      EXPECT_TRUE(ratio == 1 || std::abs(ratio - 10) < 1e-9) << "round " << i;
+    }
+  }
+  EXPECT_EQ(pcg, r.pcg_iterations);
+  EXPECT_EQ(r.rounds.front().alpha_reg, p.alpha_reg_start);
+  EXPECT_EQ(r.rounds.back().alpha_reg, r.alpha_reg_end);
+  EXPECT_NEAR(r.rounds.back().fit_distance * edge, r.mean_fit_distance, 1e-12);
+  // Even with 4 PCG iterations per round the rotation is recovered.
+  EXPECT_LT(mean_error(c.source, c.truth), 0.01 * c.target.bbox_diagonal());
+}
+
 TEST(Alignment, FinePrunesBeyondSigma) {
   // Sphere plus a far-away sphere that has no counterpart: the far one must not move.
   const test::Soup near_sphere = test::icosphere(3, 1.0);
