@@ -11,7 +11,7 @@
 #include "io/mesh_reader.hpp"
 #include "kernels/mesh/mesh_convert.hpp"
 #include "kernels/mesh/mesh_queries.hpp"
-#include "kernels/sdf/marching_cubes.hpp"
+#include "kernels/sdf/close_holes.hpp"
 #include "kernels/sdf/signed_distance.hpp"
 
 namespace topotrack {
@@ -80,29 +80,17 @@ double soup_mean_edge_length(const MeshData& data) {
 }
 
 std::vector<std::vector<std::int64_t>> boundary_loops(const MeshData& data) {
-  const auto edges = directed_edges(data);
-  std::vector<DirectedEdge> boundary;  // sorted, as `edges`
-  for (const auto& [a, b] : edges)
-    if (!contains(edges, {b, a})) boundary.emplace_back(a, b);
-  std::vector<char> used(boundary.size(), 0);
-  std::vector<std::vector<std::int64_t>> loops;
-  for (std::size_t s = 0; s < boundary.size(); ++s) {
-    if (used[s]) continue;
-    std::vector<std::int64_t> loop;
-    std::size_t e = s;
-    for (;;) {
-      used[e] = 1;
-      loop.push_back(boundary[e].first);
-      // Continue with the first unused boundary edge leaving the end vertex (the walk ends at the start
-      // vertex or, on a pinched or inconsistently oriented boundary, where no unused edge leaves).
-      const auto to = boundary[e].second;
-      auto it = std::lower_bound(boundary.begin(), boundary.end(), DirectedEdge(to, std::numeric_limits<std::int64_t>::min()));
-      while (it != boundary.end() && it->first == to && used[std::size_t(it - boundary.begin())]) ++it;
-      if (it == boundary.end() || it->first != to) break;
-      e = std::size_t(it - boundary.begin());
-    }
-    loops.push_back(std::move(loop));
+  std::vector<std::array<Index, 3>> triangles;
+  triangles.reserve(data.triangles.size());
+  for (const auto& t : data.triangles) {
+    for (auto v : t)
+      if (v < 0 || std::size_t(v) >= data.positions.size())
+        TT_THROW(InvalidInput, "boundary loops: vertex index " << v << " out of range");
+    triangles.push_back({Index(t[0]), Index(t[1]), Index(t[2])});
   }
+  std::vector<std::vector<std::int64_t>> loops;
+  for (const auto& loop : boundary_loops(std::span<const std::array<Index, 3>>(triangles)))
+    loops.emplace_back(loop.begin(), loop.end());
   return loops;
 }
 
@@ -112,44 +100,36 @@ SurfaceMesh close_holes(const MeshData& data, const FrameLoadParams& params, con
   const double h = params.voxel_size > 0 ? params.voxel_size : soup_mean_edge_length(data);
   if (!(h > 0) || !std::isfinite(h)) TT_THROW(InvalidInput, name << ": no edge length to close holes at");
   const auto loops = boundary_loops(data);
-
-  std::vector<Vec3> positions;
-  positions.reserve(data.positions.size() + loops.size());
-  for (std::size_t i = 0; i < data.positions.size(); ++i) positions.push_back(position(data, std::int64_t(i)));
-  std::vector<std::array<Index, 3>> triangles;
-  triangles.reserve(data.triangles.size());
-  for (const auto& t : data.triangles) triangles.push_back({Index(t[0]), Index(t[1]), Index(t[2])});
-
-  FrameLoadReport rep;
-  rep.voxel_size = h;
   for (const auto& loop : loops) {
     const double extent = loop_extent(data, loop);
     if (extent > params.max_hole_voxels * h)
       TT_THROW(InvalidInput, name << ": a hole of " << loop.size() << " boundary edges is " << extent
                                   << " across, larger than --close-holes closes (" << params.max_hole_voxels
                                   << " voxels of " << h << "); " << holes_summary(data, loops));
-    // The cap: a fan around the loop's centroid, each triangle taking its boundary edge a->b reversed.
-    Vec3 c = Vec3::Zero();
-    for (auto i : loop) c += position(data, i);
-    const Index centre = Index(positions.size());
-    positions.push_back(c / double(loop.size()));
-    for (std::size_t k = 0; k < loop.size(); ++k)
-      triangles.push_back({Index(loop[(k + 1) % loop.size()]), Index(loop[k]), centre});
-    rep.hole_boundary_edges += loop.size();
-    rep.largest_hole = std::max(rep.largest_hole, extent);
   }
-  rep.holes_closed = loops.size();
 
-  // Through the level set (§4.3's CalculateSignedDistance and marching cubes): a closed 2-manifold.
+  // The geometry (caps, level set, marching cubes) is kernels/sdf/close_holes.hpp.
+  std::vector<Vec3> positions;
+  positions.reserve(data.positions.size());
+  for (std::size_t i = 0; i < data.positions.size(); ++i) positions.push_back(position(data, std::int64_t(i)));
+  std::vector<std::array<Index, 3>> triangles;
+  triangles.reserve(data.triangles.size());
+  for (const auto& t : data.triangles) triangles.push_back({Index(t[0]), Index(t[1]), Index(t[2])});
+  CloseHolesParams cp;
+  cp.voxel_size = h;
+  cp.max_hole_voxels = params.max_hole_voxels;
+  CloseHolesReport cr;
   MeshData closed;
   try {
-    closed = marching_cubes(*signed_distance(positions, triangles, h));
+    closed = close_holes(positions, triangles, cp, &cr);
   } catch (const InvalidInput& e) {
-    TT_THROW(InvalidInput, name << ": closing holes: " << e.what());
+    TT_THROW(InvalidInput, name << ": " << e.what());
   }
-  if (closed.triangles.empty())
-    TT_THROW(InvalidInput, name << ": closing the holes left no surface at voxel size " << h
-                                << " (the surface is thinner than a voxel)");
+  FrameLoadReport rep;
+  rep.voxel_size = h;
+  rep.holes_closed = cr.holes_closed;
+  rep.hole_boundary_edges = cr.hole_boundary_edges;
+  rep.largest_hole = cr.largest_hole;
   SurfaceMesh mesh = to_surface_mesh(closed);
   mesh.validate(/*require_closed=*/true);
   if (rep.holes_closed > 0) {

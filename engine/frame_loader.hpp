@@ -50,11 +50,10 @@ double soup_mean_edge_length(const MeshData& data);
 //! smallest directed edge. Empty for a closed surface.
 std::vector<std::vector<std::int64_t>> boundary_loops(const MeshData& data);
 
-//! Close the holes of an open surface through the level set: each boundary loop is capped by a fan around
-//! its centroid, the capped soup becomes a narrow-band signed distance grid at `params.voxel_size` (OpenVDB,
-//! whose sign handles the self-intersections a cap may make), and its marching-cubes zero set is the closed
-//! 2-manifold returned. The whole surface is resampled at that voxel size, the resolution the tracker's
-//! level sets have anyway (§4.3). \pre data has triangles.
+//! Close the holes of an open surface through the level set at `params.voxel_size` (kernels/sdf/close_holes.hpp:
+//! caps, winding-number signed distance, thin parts thickened, marching cubes): a closed 2-manifold. The
+//! whole surface is resampled at that voxel size, the resolution the tracker's level sets have anyway (§4.3).
+//! \pre data has triangles.
 //! \throw InvalidInput naming `name` when a hole is larger than params.max_hole_voxels voxels or the result
 //! is empty (the surface is thinner than a voxel).
 SurfaceMesh close_holes(const MeshData& data, const FrameLoadParams& params, const std::string& name,

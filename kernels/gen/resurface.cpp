@@ -1,5 +1,6 @@
 #include "kernels/gen/resurface.hpp"
 
+#include <algorithm>
 #include <chrono>
 
 #include "kernels/sdf/marching_cubes.hpp"
@@ -21,12 +22,21 @@ MeshData resurface(const MeshData& source, const ResurfaceParams& params, Resurf
       triangles[f][j] = Index(v);
     }
   const auto t0 = Clock::now();
-  auto grid = signed_distance(positions, triangles, params.voxel_size, params.half_width_voxels);
+  SignedDistanceParams sdf;
+  sdf.voxel_size = params.voxel_size;
+  sdf.min_thickness_voxels = std::max(0.0, params.min_thickness_voxels);
+  sdf.half_width_voxels = std::max(params.half_width_voxels, sdf.min_thickness_voxels > 0 ? 0.5 * sdf.min_thickness_voxels + 1.5 : 1.0);
+  sdf.exact_sign_band_voxels = std::min(params.exact_sign_band_voxels, sdf.half_width_voxels);
+  sdf.sign_method = SignMethod::kWindingNumber;
+  SignedDistanceReport sdf_report;
+  auto grid = signed_distance(positions, triangles, sdf, &sdf_report);
   const auto t1 = Clock::now();
   MeshData out = marching_cubes(*grid);
   const auto t2 = Clock::now();
   if (report) {
-    report->active_voxels = grid->activeVoxelCount();
+    report->active_voxels = sdf_report.active_voxels;
+    report->signs_flipped = sdf_report.signs_flipped;
+    report->thin_vertices = sdf_report.thin_vertices;
     report->seconds_distance = std::chrono::duration<double>(t1 - t0).count();
     report->seconds_marching = std::chrono::duration<double>(t2 - t1).count();
   }

@@ -8,6 +8,7 @@
 #include <cmath>
 
 #include "kernels/raycast/target_surface.hpp"
+#include "kernels/sdf/winding_number.hpp"
 
 namespace topotrack {
 namespace {
@@ -54,35 +55,12 @@ struct Pseudonormals {
   }
 };
 
-}  // namespace
-
-std::size_t correct_signs_near_surface(openvdb::FloatGrid& phi, std::span<const Vec3> P,
-                                       std::span<const std::array<Index, 3>> T, double band) {
-  if (T.empty() || !(band > 0)) return 0;
+//! The side of each point from the pseudonormal of its closest feature (face, edge or vertex).
+std::vector<std::int8_t> pseudonormal_sides(std::span<const Vec3> P, std::span<const std::array<Index, 3>> T,
+                                            std::span<const Vec3> points) {
   const TargetSurface surface(P, T);
   const Pseudonormals normals(P, T);
-  const float fband = float(band);
-
-  // The voxels to decide, leaf by leaf in the tree's fixed leaf order.
-  openvdb::tree::LeafManager<openvdb::FloatTree> leaves(phi.tree());
-  std::vector<std::size_t> count(leaves.leafCount() + 1, 0);
-  leaves.foreach([&](const openvdb::FloatTree::LeafNodeType& leaf, std::size_t i) {
-    for (auto it = leaf.cbeginValueOn(); it; ++it) count[i + 1] += std::abs(*it) < fband;
-  });
-  for (std::size_t i = 1; i < count.size(); ++i) count[i] += count[i - 1];
-  std::vector<Vec3> points(count.back());
-  const openvdb::math::Transform& xform = phi.transform();
-  leaves.foreach([&](const openvdb::FloatTree::LeafNodeType& leaf, std::size_t i) {
-    std::size_t k = count[i];
-    for (auto it = leaf.cbeginValueOn(); it; ++it)
-      if (std::abs(*it) < fband) {
-        const openvdb::Vec3d w = xform.indexToWorld(it.getCoord());
-        points[k++] = Vec3(w.x(), w.y(), w.z());
-      }
-  });
   const auto hits = surface.closest_points(points);
-
-  // The side of each point from the pseudonormal of the closest feature (face, edge or vertex).
   std::vector<std::int8_t> side(points.size(), 0);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, points.size(), 512), [&](const auto& r) {
     for (std::size_t i = r.begin(); i < r.end(); ++i) {
@@ -107,6 +85,46 @@ std::size_t correct_signs_near_surface(openvdb::FloatGrid& phi, std::span<const 
       side[i] = s > 0 ? 1 : s < 0 ? -1 : 0;
     }
   });
+  return side;
+}
+
+//! The side of each point from the winding number: inside at >= 1/2 (the union where parts overlap).
+std::vector<std::int8_t> winding_sides(std::span<const Vec3> P, std::span<const std::array<Index, 3>> T,
+                                       std::span<const Vec3> points) {
+  const WindingNumber winding(P, T);
+  const auto w = winding.evaluate(points);
+  std::vector<std::int8_t> side(points.size(), 0);
+  // Within 1e-3 of 1/2 the point is on the surface to rounding: the magnitude (~0) matters, not the side.
+  for (std::size_t i = 0; i < w.size(); ++i) side[i] = w[i] > 0.501 ? -1 : w[i] < 0.499 ? 1 : 0;
+  return side;
+}
+
+}  // namespace
+
+std::size_t correct_signs_near_surface(openvdb::FloatGrid& phi, std::span<const Vec3> P,
+                                       std::span<const std::array<Index, 3>> T, double band, SignMethod method) {
+  if (T.empty() || !(band > 0)) return 0;
+  const float fband = float(band);
+
+  // The voxels to decide, leaf by leaf in the tree's fixed leaf order.
+  openvdb::tree::LeafManager<openvdb::FloatTree> leaves(phi.tree());
+  std::vector<std::size_t> count(leaves.leafCount() + 1, 0);
+  leaves.foreach([&](const openvdb::FloatTree::LeafNodeType& leaf, std::size_t i) {
+    for (auto it = leaf.cbeginValueOn(); it; ++it) count[i + 1] += std::abs(*it) < fband;
+  });
+  for (std::size_t i = 1; i < count.size(); ++i) count[i] += count[i - 1];
+  std::vector<Vec3> points(count.back());
+  const openvdb::math::Transform& xform = phi.transform();
+  leaves.foreach([&](const openvdb::FloatTree::LeafNodeType& leaf, std::size_t i) {
+    std::size_t k = count[i];
+    for (auto it = leaf.cbeginValueOn(); it; ++it)
+      if (std::abs(*it) < fband) {
+        const openvdb::Vec3d w = xform.indexToWorld(it.getCoord());
+        points[k++] = Vec3(w.x(), w.y(), w.z());
+      }
+  });
+  const std::vector<std::int8_t> side =
+      method == SignMethod::kWindingNumber ? winding_sides(P, T, points) : pseudonormal_sides(P, T, points);
 
   std::vector<std::size_t> flipped(leaves.leafCount(), 0);
   leaves.foreach([&](openvdb::FloatTree::LeafNodeType& leaf, std::size_t i) {

@@ -7,7 +7,8 @@
 //! does not mind, but ConstrainTopology compares the signs with the mesh's exact edge crossings, and
 //! every such node made the cells around it "complex": hundreds of needless resamplings per frame. The
 //! angle-weighted pseudonormal of the closest feature (Bærentzen and Aanæs 2005) gives the exact side for
-//! a closed, consistently oriented mesh.
+//! a closed, consistently oriented mesh that does not intersect itself; where it does (real scans and
+//! animations do), the generalized winding number (winding_number.hpp) gives the side instead.
 #include <openvdb/openvdb.h>
 
 #include <array>
@@ -17,11 +18,18 @@
 
 namespace topotrack {
 
+//! How correct_signs_near_surface decides a side.
+enum class SignMethod {
+  kPseudonormal,   //!< closest feature's pseudonormal: exact for an embedded mesh, fast (one closest point)
+  kWindingNumber,  //!< winding number >= 1/2: also right where the surface crosses itself or has small holes
+};
+
 //! Re-decide the sign of every active voxel of `phi` whose |value| is below `band` (world units) from the
-//! closest point of the mesh (positions, triangles) and its pseudonormal; magnitudes are kept. Parallel,
-//! deterministic. Returns the number of voxels whose sign changed.
+//! closest point of the mesh (positions, triangles) and its pseudonormal, or from the winding number;
+//! magnitudes are kept. Parallel, deterministic. Returns the number of voxels whose sign changed.
 //! \pre the mesh is closed and consistently oriented (outward normals); phi is on that mesh.
 std::size_t correct_signs_near_surface(openvdb::FloatGrid& phi, std::span<const Vec3> positions,
-                                       std::span<const std::array<Index, 3>> triangles, double band);
+                                       std::span<const std::array<Index, 3>> triangles, double band,
+                                       SignMethod method = SignMethod::kPseudonormal);
 
 }  // namespace topotrack

@@ -1,7 +1,9 @@
 #include "kernels/sdf/signed_distance.hpp"
 
 #include "kernels/sdf/exact_sign.hpp"
+#include "kernels/sdf/thicken.hpp"
 
+#include <chrono>
 #include <cmath>
 #include <mutex>
 #include <openvdb/tools/MeshToVolume.h>
@@ -48,12 +50,20 @@ openvdb::math::Transform::Ptr voxel_transform(double voxel_size) {
 }
 
 openvdb::FloatGrid::Ptr signed_distance(std::span<const Vec3> positions,
-                                        std::span<const std::array<Index, 3>> triangles, double voxel_size,
-                                        double half_width_voxels, double exact_sign_band_voxels) {
+                                        std::span<const std::array<Index, 3>> triangles,
+                                        const SignedDistanceParams& params, SignedDistanceReport* report) {
+  using Clock = std::chrono::steady_clock;
   ensure_openvdb_initialized();
+  const double voxel_size = params.voxel_size, half_width_voxels = params.half_width_voxels;
   auto xform = voxel_transform(voxel_size);
   if (!std::isfinite(half_width_voxels) || half_width_voxels < 1.0)
     TT_THROW(InvalidInput, "signed distance: half width must be at least 1 voxel, got " << half_width_voxels);
+  if (!std::isfinite(params.min_thickness_voxels) || params.min_thickness_voxels < 0 ||
+      (params.min_thickness_voxels > 0 && half_width_voxels < 0.5 * params.min_thickness_voxels + 1.5))
+    TT_THROW(InvalidInput, "signed distance: a minimum thickness of " << params.min_thickness_voxels
+                                                                      << " voxels needs a half width of at least "
+                                                                      << 0.5 * params.min_thickness_voxels + 1.5
+                                                                      << " voxels, got " << half_width_voxels);
   for (std::size_t i = 0; i < positions.size(); ++i)
     if (!positions[i].allFinite()) TT_THROW(InvalidInput, "signed distance: vertex " << i << " is not finite");
   for (std::size_t f = 0; f < triangles.size(); ++f)
@@ -61,21 +71,49 @@ openvdb::FloatGrid::Ptr signed_distance(std::span<const Vec3> positions,
       if (v >= positions.size())
         TT_THROW(InvalidInput, "signed distance: triangle " << f << " has vertex index " << v << " out of range ("
                                                             << positions.size() << " vertices)");
+  SignedDistanceReport rep;
   const float hw = static_cast<float>(half_width_voxels);
   openvdb::FloatGrid::Ptr grid;
   if (triangles.empty()) {
     grid = openvdb::FloatGrid::create(static_cast<float>(voxel_size * half_width_voxels));
   } else {
+    const auto t0 = Clock::now();
     TriangleAdapter mesh(positions, triangles, 1.0 / voxel_size);
     openvdb::util::NullInterrupter interrupter;
     grid = openvdb::tools::meshToVolume<openvdb::FloatGrid>(interrupter, mesh, *xform, hw, hw, 0, nullptr);
-    // OpenVDB's sign next to the surface can be wrong at concave creases (see exact_sign.hpp).
-    if (exact_sign_band_voxels > 0)
-      correct_signs_near_surface(*grid, positions, triangles, exact_sign_band_voxels * voxel_size);
+    grid->setTransform(xform);
+    const auto t1 = Clock::now();
+    // OpenVDB's sign next to the surface can be wrong at concave creases and where the surface crosses
+    // itself (see exact_sign.hpp).
+    if (params.exact_sign_band_voxels > 0)
+      rep.signs_flipped = correct_signs_near_surface(*grid, positions, triangles,
+                                                     params.exact_sign_band_voxels * voxel_size, params.sign_method);
+    const auto t2 = Clock::now();
+    if (params.min_thickness_voxels > 0) {
+      const auto thick = thicken_thin_parts(*grid, positions, triangles, {params.min_thickness_voxels * voxel_size});
+      rep.thin_vertices = thick.thin_vertices;
+      rep.thickened_voxels = thick.voxels_changed;
+    }
+    const auto t3 = Clock::now();
+    rep.seconds_volume = std::chrono::duration<double>(t1 - t0).count();
+    rep.seconds_sign = std::chrono::duration<double>(t2 - t1).count();
+    rep.seconds_thicken = std::chrono::duration<double>(t3 - t2).count();
   }
   grid->setTransform(xform);
   grid->setGridClass(openvdb::GRID_LEVEL_SET);
+  rep.active_voxels = grid->activeVoxelCount();
+  if (report) *report = rep;
   return grid;
+}
+
+openvdb::FloatGrid::Ptr signed_distance(std::span<const Vec3> positions,
+                                        std::span<const std::array<Index, 3>> triangles, double voxel_size,
+                                        double half_width_voxels, double exact_sign_band_voxels) {
+  SignedDistanceParams p;
+  p.voxel_size = voxel_size;
+  p.half_width_voxels = half_width_voxels;
+  p.exact_sign_band_voxels = exact_sign_band_voxels;
+  return signed_distance(positions, triangles, p);
 }
 
 openvdb::FloatGrid::Ptr signed_distance(const SurfaceMesh& mesh, double voxel_size, double half_width_voxels,

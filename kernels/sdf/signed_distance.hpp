@@ -12,6 +12,7 @@
 #include <span>
 
 #include "kernels/mesh/surface_mesh.hpp"
+#include "kernels/sdf/exact_sign.hpp"
 
 namespace topotrack {
 
@@ -22,6 +23,34 @@ void ensure_openvdb_initialized();
 //! The transform of the convention above: uniform scale, voxel centres at integer multiples.
 //! \throw InvalidInput when voxel_size is not finite and positive.
 openvdb::math::Transform::Ptr voxel_transform(double voxel_size);
+
+struct SignedDistanceParams {
+  double voxel_size = 0;            //!< required: finite, > 0
+  double half_width_voxels = 3.0;   //!< active band on each side of the surface, >= 1
+  //! > 0: voxels closer to the surface than that many voxels get their sign decided exactly
+  //! (exact_sign.hpp), as ConstrainTopology needs (§4.3) and as marching cubes of real data needs.
+  double exact_sign_band_voxels = 0.0;
+  SignMethod sign_method = SignMethod::kPseudonormal;  //!< kWindingNumber for surfaces that cross themselves
+  //! > 0: parts thinner than that many voxels are thickened to it (thicken.hpp) so that the zero set keeps
+  //! them in one piece; needs half_width_voxels >= min_thickness_voxels / 2 + 1.5.
+  double min_thickness_voxels = 0.0;
+};
+
+struct SignedDistanceReport {
+  std::size_t active_voxels = 0;
+  std::size_t signs_flipped = 0;     //!< voxels whose OpenVDB sign the exact-sign pass changed
+  std::size_t thin_vertices = 0;     //!< vertices on parts thinner than min_thickness_voxels
+  std::size_t thickened_voxels = 0;  //!< voxels the thickening lowered
+  double seconds_volume = 0, seconds_sign = 0, seconds_thicken = 0;
+};
+
+//! Signed distance to the triangle mesh (positions, triangles) in a narrow band (§4.3), with the passes
+//! `params` asks for. \pre the mesh is closed and outward oriented (for an open mesh the sign is what
+//! the sign method makes of it). \throw InvalidInput on a bad parameter (see SignedDistanceParams), a
+//! non-finite coordinate or a triangle index out of range. An empty mesh gives an empty grid.
+openvdb::FloatGrid::Ptr signed_distance(std::span<const Vec3> positions,
+                                        std::span<const std::array<Index, 3>> triangles,
+                                        const SignedDistanceParams& params, SignedDistanceReport* report = nullptr);
 
 //! Signed distance to the triangle mesh (positions, triangles) in a narrow band (§4.3).
 //! \pre the mesh is closed (for an open mesh the sign is what OpenVDB's flood fill makes of it).
