@@ -63,7 +63,7 @@ void Progress::frame_done(std::size_t index, long number, const std::string& sum
     std::fprintf(out_, "frame %zu/%zu (#%ld) %s eta %.0fs\n", index + 1, total_, number, summary.c_str(),
                  eta < 0 ? 0.0 : eta);
   } else if (mode_ == ProgressMode::Jsonl) {
-    std::fprintf(out_, "{\"event\":\"frame\",\"frame_index\":%zu,\"frame\":%ld,\"total\":%zu,\"eta_seconds\":%.3f,%s}\n",
+    std::fprintf(out_, "{\"event\":\"frame\",\"frame_index\":%zu,\"frame\":%ld,\"total\":%zu,\"eta_seconds\":%.3f,\"report\":%s}\n",
                  index, number, total_, eta < 0 ? 0.0 : eta, json.c_str());
   } else if (mode_ == ProgressMode::Bar && index + 1 == total_) {
     std::fprintf(out_, "\n");

@@ -17,7 +17,8 @@ public:
   Progress(ProgressMode mode, std::size_t total_frames, std::FILE* out = stderr);
   //! Frame `done` of `total` is being processed and is in `stage`.
   void stage(std::size_t frame_index, long frame_number, const std::string& stage);
-  //! Frame finished; `summary` is a short human line, `json` a one-line JSON object (without braces' newline).
+  //! Frame finished; `summary` is a short human line, `json` a one-line JSON object (jsonl mode: the
+  //! frame line's "report" member).
   void frame_done(std::size_t frame_index, long frame_number, const std::string& summary, const std::string& json);
   void finish(const std::string& summary);
   void message(const std::string& text);

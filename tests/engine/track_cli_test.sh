@@ -25,6 +25,28 @@ same() {  # every frame file of $1 equals the one in $2
 same "$W/a" "$W/b"
 echo "ok: 1 and 2 threads give bit-identical frames and events"
 
+# --progress jsonl: one JSON object per line (host applications parse it), a frame line per frame.
+"$BIN" track "$W/in" -o "$W/j" --progress jsonl 2>"$W/jsonl" >/dev/null
+cat >"$W/jsonl.cmake" <<'CMAKE'
+file(STRINGS "${F}" lines)
+set(frames 0)
+foreach(line IN LISTS lines)
+  string(JSON event ERROR_VARIABLE err GET "${line}" event)
+  if(err)
+    message(FATAL_ERROR "not a JSON object: ${line}")
+  endif()
+  if(event STREQUAL "frame")
+    string(JSON v GET "${line}" report vertices)
+    math(EXPR frames "${frames} + 1")
+  endif()
+endforeach()
+if(NOT frames EQUAL 6)
+  message(FATAL_ERROR "${frames} frame lines, expected 6")
+endif()
+CMAKE
+cmake -DF="$W/jsonl" -P "$W/jsonl.cmake" || fail "--progress jsonl: $(head -c 300 "$W/jsonl")"
+echo "ok: --progress jsonl writes one JSON object per line"
+
 # Crash safety: kill -9 after a random number of complete frames, possibly mid-frame, then resume.
 for trial in 1 2; do
   rm -rf "$W/c"
