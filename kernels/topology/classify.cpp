@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numeric>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -97,10 +98,11 @@ bool same_cycle(const std::vector<int>& loop, std::span<const std::uint8_t> poly
   return true;
 }
 
-bool is_complex(const SurfaceMesh& mesh, const LatticeCut& cut, const CellIndex& index, std::size_t ci,
-                std::uint8_t mask, Scratch& s) {
+CellVerdict classify_cell(const SurfaceMesh& mesh, const LatticeCut& cut, const CellIndex& index, std::size_t ci,
+                          std::uint8_t mask, Scratch& s) {
+  using enum CellVerdict;
   const std::uint32_t pb = index.piece_begin[ci], pe = index.piece_begin[ci + 1];
-  if (pb == pe) return mask != 0 && mask != 255;
+  if (pb == pe) return mask != 0 && mask != 255 ? kMissed : kSimple;
   const openvdb::Coord C = cell_from_key(index.cells[ci]);
   // Cell-local vertex ids.
   s.verts.clear();
@@ -127,7 +129,7 @@ bool is_complex(const SurfaceMesh& mesh, const LatticeCut& cut, const CellIndex&
   }
   std::sort(s.edges.begin(), s.edges.end());
   for (std::size_t i = 1; i < s.edges.size(); ++i)
-    if (s.edges[i].from == s.edges[i - 1].from && s.edges[i].to == s.edges[i - 1].to) return true;
+    if (s.edges[i].from == s.edges[i - 1].from && s.edges[i].to == s.edges[i - 1].to) return kDuplicateEdge;
   s.parent.resize(V);
   std::iota(s.parent.begin(), s.parent.end(), 0u);
   s.boundary.clear();
@@ -144,7 +146,7 @@ bool is_complex(const SurfaceMesh& mesh, const LatticeCut& cut, const CellIndex&
   const long chi = long(V) - long(E) + long(pe - pb);
   // Boundary loops; s.boundary is sorted by `from`. A vertex with two outgoing boundary edges is a pinch.
   for (std::size_t i = 1; i < s.boundary.size(); ++i)
-    if (s.boundary[i].from == s.boundary[i - 1].from) return true;
+    if (s.boundary[i].from == s.boundary[i - 1].from) return kPinch;
   const cube::CubePolygons& polys = cube::cube_polygons(mask);
   s.used.assign(s.boundary.size() + polys.count, 0);
   std::uint8_t* poly_used = s.used.data() + s.boundary.size();
@@ -154,35 +156,35 @@ bool is_complex(const SurfaceMesh& mesh, const LatticeCut& cut, const CellIndex&
     s.loop.clear();
     std::size_t cur = start;
     for (std::size_t steps = 0;; ++steps) {
-      if (s.used[cur] || steps > s.boundary.size()) return true;
+      if (s.used[cur] || steps > s.boundary.size()) return kBrokenLoop;
       s.used[cur] = 1;
-      if (s.boundary[cur].tag == kOnMeshEdge) return true;  // M has a boundary here
+      if (s.boundary[cur].tag == kOnMeshEdge) return kMeshBoundary;
       const PointKey& k = s.verts[s.boundary[cur].from];
       if (kind(k) == PointKind::FacePoint) {
         const int e = cube_edge_of(k, C);
-        if (e < 0) return true;
+        if (e < 0) return kBrokenLoop;
         s.loop.push_back(e);
       }
       const auto it = std::lower_bound(s.boundary.begin(), s.boundary.end(), DirEdge{s.boundary[cur].to, 0, 0});
-      if (it == s.boundary.end() || it->from != s.boundary[cur].to) return true;  // open chain
+      if (it == s.boundary.end() || it->from != s.boundary[cur].to) return kBrokenLoop;  // open chain
       cur = std::size_t(it - s.boundary.begin());
       if (cur == start) break;
     }
-    if (s.loop.empty()) return true;
+    if (s.loop.empty()) return kLoopInFace;
     int match = -1;
     for (int p = 0; p < polys.count && match < 0; ++p)
       if (!poly_used[p] && same_cycle(s.loop, polys.polygon(p))) match = p;
-    if (match < 0) return true;
+    if (match < 0) return kUnmatchedLoop;
     poly_used[match] = 1;
     s.loop_root.push_back(find(s.parent, s.boundary[start].from));
   }
-  if (s.loop_root.size() != polys.count) return true;
+  if (s.loop_root.size() != polys.count) return kMissed;
   // One loop per component and every component a disk.
   std::sort(s.loop_root.begin(), s.loop_root.end());
-  if (std::adjacent_find(s.loop_root.begin(), s.loop_root.end()) != s.loop_root.end()) return true;
-  if (components != s.loop_root.size()) return true;
-  if (chi != long(s.loop_root.size())) return true;
-  return s.boundary.size() > 2 && curves_cross(mesh, cut, s);
+  if (std::adjacent_find(s.loop_root.begin(), s.loop_root.end()) != s.loop_root.end()) return kNotDisk;
+  if (components != s.loop_root.size()) return kNotDisk;
+  if (chi != long(s.loop_root.size())) return kNotDisk;
+  return s.boundary.size() > 2 && curves_cross(mesh, cut, s) ? kCurvesCross : kSimple;
 }
 
 }  // namespace
@@ -194,27 +196,83 @@ std::pair<std::uint32_t, std::uint32_t> CellIndex::pieces_of(std::uint64_t cell)
   return {piece_begin[i], piece_begin[i + 1]};
 }
 
-std::uint8_t theta_mask(const openvdb::FloatGrid::ConstAccessor& acc, const openvdb::Coord& cell) {
+bool CellIndex::is_flipped(const openvdb::Coord& node) const {
+  return !flipped.empty() && std::binary_search(flipped.begin(), flipped.end(), cell_key(node));
+}
+
+float node_value(const openvdb::FloatGrid::ConstAccessor& acc, const CellIndex& index, const openvdb::Coord& node) {
+  const float v = acc.getValue(node);
+  if (!index.is_flipped(node)) return v;
+  return v < 0.f ? -v : (v > 0.f ? -v : -std::numeric_limits<float>::min());
+}
+
+std::uint8_t theta_mask(const openvdb::FloatGrid::ConstAccessor& acc, const CellIndex& index, const openvdb::Coord& cell) {
   std::uint8_t m = 0;
   for (int c = 0; c < 8; ++c)
-    if (acc.getValue(cell.offsetBy(c & 1, (c >> 1) & 1, (c >> 2) & 1)) < 0.f) m |= std::uint8_t(1u << c);
+    if (node_value(acc, index, cell.offsetBy(c & 1, (c >> 1) & 1, (c >> 2) & 1)) < 0.f) m |= std::uint8_t(1u << c);
   return m;
 }
+
+namespace {
+
+using CellPieces = std::vector<std::pair<std::uint64_t, std::uint32_t>>;  // (cell, piece), sorted
+
+// Whether node `n` (|Θ| < kSignTolerance voxels) is inside, from its lattice-edge neighbours farther from
+// the zero set and the parity of M's crossings of the edges to them (see kSignTolerance); `raw` when they
+// disagree or there is none.
+bool resolve_node_sign(const LatticeCut& cut, const CellPieces& by_cell, const openvdb::FloatGrid::ConstAccessor& acc,
+                       const openvdb::Coord& n, float tol, bool raw, std::array<std::vector<Index>, 6>& faces) {
+  for (auto& f : faces) f.clear();
+  // Every crossing of the six lattice edges at n is a face point of a piece in one of the eight cells around n.
+  for (int d = 0; d < 8; ++d) {
+    const openvdb::Coord cell = n.offsetBy(-(d & 1), -((d >> 1) & 1), -((d >> 2) & 1));
+    const std::uint64_t ck = cell_key(cell);
+    for (auto it = std::lower_bound(by_cell.begin(), by_cell.end(), std::make_pair(ck, std::uint32_t(0)));
+         it != by_cell.end() && it->first == ck; ++it) {
+      const Piece& pc = cut.pieces[it->second];
+      for (int i = 0; i < pc.size; ++i) {
+        const PointKey& k = cut.keys[pc.begin + i];
+        if (kind(k) != PointKind::FacePoint) continue;
+        const int L = key_axis(k), ua = L == 0 ? 1 : 0, va = L == 2 ? 1 : 2;
+        if (key_plane_u(k) != n[ua] || key_plane_v(k) != n[va]) continue;
+        faces[2 * L + (cell[L] == n[L] ? 1 : 0)].push_back(key_element(k));
+      }
+    }
+  }
+  int votes[2] = {0, 0};
+  for (int s = 0; s < 6; ++s) {
+    const int L = s >> 1;
+    openvdb::Coord m = n;
+    m[L] += (s & 1) ? 1 : -1;
+    const float vm = acc.getValue(m);
+    if (!(std::abs(vm) >= tol)) continue;
+    auto& f = faces[s];
+    std::sort(f.begin(), f.end());
+    const std::size_t crossings = std::size_t(std::unique(f.begin(), f.end()) - f.begin());
+    ++votes[int((vm < 0.f) != (crossings % 2 == 1))];
+  }
+  if (votes[0] > 0 && votes[1] == 0) return false;
+  if (votes[1] > 0 && votes[0] == 0) return true;
+  return raw;
+}
+
+}  // namespace
 
 CellIndex index_cells(const LatticeCut& cut, const openvdb::FloatGrid& theta) {
   CellIndex idx;
   const std::size_t np = cut.pieces.size();
-  std::vector<std::pair<std::uint64_t, std::uint32_t>> by_cell(np);
+  CellPieces by_cell(np);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, np, 8192), [&](const tbb::blocked_range<std::size_t>& r) {
     for (std::size_t i = r.begin(); i != r.end(); ++i) by_cell[i] = {cut.pieces[i].cell, std::uint32_t(i)};
   });
   tbb::parallel_sort(by_cell.begin(), by_cell.end());
 
-  // Θ's sign-change cells, per leaf node.
+  // Θ's sign-change cells and the nodes near its zero set, per leaf node.
   std::vector<const openvdb::FloatTree::LeafNodeType*> leaves;
   theta.tree().getNodes(leaves);
-  std::vector<std::vector<std::uint64_t>> leaf_cells(leaves.size());
-  const float limit = float(1.8 * theta.voxelSize()[0]);
+  std::vector<std::vector<std::uint64_t>> leaf_cells(leaves.size()), leaf_near(leaves.size());
+  const float limit = float(1.8 * theta.voxelSize()[0]), tol = float(kSignTolerance * theta.voxelSize()[0]);
+  const CellIndex raw;
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, leaves.size(), 16), [&](const tbb::blocked_range<std::size_t>& r) {
     auto acc = theta.getConstAccessor();
     for (std::size_t l = r.begin(); l != r.end(); ++l) {
@@ -222,18 +280,38 @@ CellIndex index_cells(const LatticeCut& cut, const openvdb::FloatGrid& theta) {
         // A corner value beyond the cell diagonal means no sign change in the cell (Θ is a distance).
         if (std::abs(*it) > limit) continue;
         const openvdb::Coord c = it.getCoord();
-        const std::uint8_t m = theta_mask(acc, c);
-        if (m != 0 && m != 255) {
-          bool in_range = true;
-          for (int a = 0; a < 3; ++a) in_range = in_range && std::abs(c[a]) < kCellRange - 4;
-          if (in_range) leaf_cells[l].push_back(cell_key(c));
-        }
+        bool in_range = true;
+        for (int a = 0; a < 3; ++a) in_range = in_range && std::abs(c[a]) < kCellRange - 4;
+        if (!in_range) continue;
+        if (std::abs(*it) < tol) leaf_near[l].push_back(cell_key(c));
+        const std::uint8_t m = theta_mask(acc, raw, c);
+        if (m != 0 && m != 255) leaf_cells[l].push_back(cell_key(c));
       }
+    }
+  });
+  std::vector<std::uint64_t> near;
+  for (const auto& v : leaf_near) near.insert(near.end(), v.begin(), v.end());
+  std::sort(near.begin(), near.end());
+  std::vector<std::uint8_t> flip(near.size(), 0);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, near.size(), 64), [&](const tbb::blocked_range<std::size_t>& r) {
+    auto acc = theta.getConstAccessor();
+    std::array<std::vector<Index>, 6> faces;
+    for (std::size_t i = r.begin(); i != r.end(); ++i) {
+      const openvdb::Coord n = cell_from_key(near[i]);
+      const bool inside = acc.getValue(n) < 0.f;
+      flip[i] = resolve_node_sign(cut, by_cell, acc, n, tol, inside, faces) != inside;
     }
   });
   std::vector<std::uint64_t> sign_cells;
   for (const auto& v : leaf_cells) sign_cells.insert(sign_cells.end(), v.begin(), v.end());
+  for (std::size_t i = 0; i < near.size(); ++i) {
+    if (!flip[i]) continue;
+    idx.flipped.push_back(near[i]);
+    const openvdb::Coord n = cell_from_key(near[i]);
+    for (int d = 0; d < 8; ++d) sign_cells.push_back(cell_key(n.offsetBy(-(d & 1), -((d >> 1) & 1), -((d >> 2) & 1))));
+  }
   tbb::parallel_sort(sign_cells.begin(), sign_cells.end());
+  sign_cells.erase(std::unique(sign_cells.begin(), sign_cells.end()), sign_cells.end());
 
   idx.cells.reserve(sign_cells.size() + np / 2);
   idx.piece_order.resize(np);
@@ -255,20 +333,26 @@ CellIndex index_cells(const LatticeCut& cut, const openvdb::FloatGrid& theta) {
   return idx;
 }
 
-std::vector<std::uint64_t> complex_cells(const SurfaceMesh& mesh, const LatticeCut& cut, const CellIndex& index, const openvdb::FloatGrid& theta) {
+std::vector<CellVerdict> classify_cells(const SurfaceMesh& mesh, const LatticeCut& cut, const CellIndex& index,
+                                       const openvdb::FloatGrid& theta) {
   const std::size_t n = index.cells.size();
-  std::vector<std::uint8_t> flag(n, 0);
+  std::vector<CellVerdict> verdict(n, CellVerdict::kSimple);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 256), [&](const tbb::blocked_range<std::size_t>& r) {
     auto acc = theta.getConstAccessor();
     Scratch s;
     for (std::size_t i = r.begin(); i != r.end(); ++i) {
-      const std::uint8_t mask = theta_mask(acc, cell_from_key(index.cells[i]));
-      flag[i] = is_complex(mesh, cut, index, i, mask, s) ? 1 : 0;
+      const std::uint8_t mask = theta_mask(acc, index, cell_from_key(index.cells[i]));
+      verdict[i] = classify_cell(mesh, cut, index, i, mask, s);
     }
   });
+  return verdict;
+}
+
+std::vector<std::uint64_t> complex_cells(const SurfaceMesh& mesh, const LatticeCut& cut, const CellIndex& index, const openvdb::FloatGrid& theta) {
+  const std::vector<CellVerdict> verdict = classify_cells(mesh, cut, index, theta);
   std::vector<std::uint64_t> out;
-  for (std::size_t i = 0; i < n; ++i)
-    if (flag[i]) out.push_back(index.cells[i]);
+  for (std::size_t i = 0; i < verdict.size(); ++i)
+    if (verdict[i] != CellVerdict::kSimple) out.push_back(index.cells[i]);
   for (const auto& box : cut.bad_boxes)
     for (int x = box[0].x(); x <= box[1].x(); ++x)
       for (int y = box[0].y(); y <= box[1].y(); ++y)

@@ -20,22 +20,59 @@
 namespace topotrack::topology {
 
 //! The cells to examine (those holding pieces of M and those where Θ changes sign), sorted by cell key,
-//! with the range of each cell's pieces in `piece_order`.
+//! with the range of each cell's pieces in `piece_order`, and the lattice nodes whose sign is taken from M.
 struct CellIndex {
   std::vector<std::uint64_t> cells;        //!< sorted cell keys
   std::vector<std::uint32_t> piece_begin;  //!< cell i has pieces piece_order[piece_begin[i], piece_begin[i+1])
   std::vector<std::uint32_t> piece_order;  //!< piece indices grouped by cell, by piece index within a cell
+  //! Sorted keys (cell_key of the node) of the lattice nodes whose sign is the opposite of Θ's: see
+  //! kSignTolerance.
+  std::vector<std::uint64_t> flipped;
   //! The piece range of a cell (empty when the cell has no piece).
   std::pair<std::uint32_t, std::uint32_t> pieces_of(std::uint64_t cell) const;
+  bool is_flipped(const openvdb::Coord& node) const;
 };
 
-//! Group the pieces by cell and add the cells where Θ changes sign. The sign-change cells are found
-//! in parallel over Θ's leaf nodes (a cell is visited from its minimum corner, which must be active:
-//! true for any level set whose band is at least 2 voxels wide on each side).
+//! Lattice nodes closer than this to Θ's zero set (in voxels) take their sign from M's crossings of the
+//! lattice edges around them. The cut works on M moved by up to kSnap + kShift per axis (lattice_cut.hpp),
+//! at most 0.018 voxel, so a node that close to M may lie on the other side of the cut mesh than of M; its
+//! sign then disagrees with M's crossings in the cells around it, and a well-represented surface would be
+//! resampled there (Wojtan et al. 2009 push nearly-zero lattice values off zero for the same reason). The
+//! margin above 0.018 covers meshToVolume's distances, which can overestimate the true distance near
+//! vertices by a few hundredths of a voxel. Such a node takes the sign that its lattice-edge neighbours
+//! farther from the zero set imply through the parity of M's crossings of the edge between them, when they
+//! all agree; otherwise Θ's sign. For Θ = φ_M this is M's own side; for Θ = φ_S it moves S's zero set by at
+//! most this much towards M (the tracker's topology_tolerance already allows 0.5 voxel).
+inline constexpr double kSignTolerance = 0.1;
+
+//! Group the pieces by cell, decide the signs of the nodes within kSignTolerance of Θ's zero set, and add
+//! the cells where Θ (with those signs) changes sign. The sign-change cells are found in parallel over Θ's
+//! leaf nodes (a cell is visited from its minimum corner, which must be active: true for any level set
+//! whose band is at least 2 voxels wide on each side).
 CellIndex index_cells(const LatticeCut& cut, const openvdb::FloatGrid& theta);
 
-//! Corner signs of Θ at a cell (bit c set: corner c inside, value < 0).
-std::uint8_t theta_mask(const openvdb::FloatGrid::ConstAccessor& acc, const openvdb::Coord& cell);
+//! Θ's value at a lattice node, with the sign decided by index_cells (a flipped zero becomes negative).
+float node_value(const openvdb::FloatGrid::ConstAccessor& acc, const CellIndex& index, const openvdb::Coord& node);
+//! Corner signs of Θ at a cell as index_cells decided them (bit c set: corner c inside, value < 0).
+std::uint8_t theta_mask(const openvdb::FloatGrid::ConstAccessor& acc, const CellIndex& index, const openvdb::Coord& cell);
+
+//! Why a cell is complex (kSimple: it is not).
+enum class CellVerdict : std::uint8_t {
+  kSimple = 0,
+  kMissed,         //!< Θ has more marching-cubes polygons in the cell than M has boundary loops
+  kDuplicateEdge,  //!< two pieces share a directed edge (M folds over itself)
+  kPinch,          //!< two boundary loops of M ∩ cell touch at a point
+  kMeshBoundary,   //!< M has a boundary edge in the cell
+  kBrokenLoop,     //!< a boundary loop leaves the cell's edges or does not close
+  kLoopInFace,     //!< a boundary loop crosses no cube edge (a closed curve inside a cube face)
+  kUnmatchedLoop,  //!< a boundary loop runs through other cube edges than any polygon of Θ
+  kNotDisk,        //!< a component of M ∩ cell is not a disk with one boundary loop
+  kCurvesCross,    //!< two of M's cut curves cross on a cube face
+};
+
+//! The verdict of every indexed cell (parallel, per-cell results, deterministic).
+std::vector<CellVerdict> classify_cells(const SurfaceMesh& mesh, const LatticeCut& cut, const CellIndex& index,
+                                        const openvdb::FloatGrid& theta);
 
 //! Classify every indexed cell in parallel (per-cell results, deterministic). Returns the sorted keys of
 //! the complex cells, including every cell of the boxes of the cut's bad faces.

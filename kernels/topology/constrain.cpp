@@ -118,12 +118,16 @@ ConstrainReport constrain_topology(SurfaceMesh& mesh, const openvdb::FloatGrid& 
   report.components_before = int(connected_components(mesh));
   absorb_sliver_pieces(mesh, cut, region);
 
-  // Replacement, growing the region when a check fails (§4.3: "if a local repair fails, grow").
+  // Replacement, growing the region when a check fails (§4.3: "if a local repair fails, grow"), then
+  // taking in the cells of any sliver (at most kSliverRounds times; a valid result is never given up).
   const auto t1 = Clock::now();
-  Assembly A;
-  SurfaceMesh result;
+  constexpr int kSliverRounds = 3;
+  Assembly A, valid_A;
+  SurfaceMesh result, valid_result;
+  std::vector<std::uint64_t> valid_region;
+  bool have_valid = false;
   std::string why;
-  for (int attempt = 0;; ++attempt) {
+  for (int attempt = 0, sliver_round = 0;;) {
     bool ok = assemble(mesh, cut, index, region, theta, A, why);
     if (ok) {
       std::vector<VertexId> ids(A.positions.size());
@@ -138,12 +142,34 @@ ConstrainReport constrain_topology(SurfaceMesh& mesh, const openvdb::FloatGrid& 
         why = e.what();
       }
     }
-    if (ok) break;
+    if (ok) {
+      if (sliver_round < kSliverRounds) {
+        std::vector<std::uint64_t> grown = region;
+        if (absorb_sliver_triangles(cut, A, xform, grown) > 0) {
+          valid_A = std::move(A);
+          valid_result = std::move(result);
+          valid_region = region;
+          have_valid = true;
+          region = std::move(grown);
+          absorb_sliver_pieces(mesh, cut, region);
+          ++sliver_round;
+          continue;
+        }
+      }
+      break;
+    }
+    if (have_valid) {  // a sliver round made the stitching fail: keep the last valid result
+      A = std::move(valid_A);
+      result = std::move(valid_result);
+      region = std::move(valid_region);
+      break;
+    }
     if (attempt >= params.max_region_growth)
       TT_THROW(TopologyError, "constrain topology: replacement failed after growing the complex region "
                                   << attempt << " times: " << why);
     region = grow_region(region);
     absorb_sliver_pieces(mesh, cut, region);
+    ++attempt;
     ++report.region_growth;
   }
   report.complex_cells = region.size();

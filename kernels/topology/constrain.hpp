@@ -23,8 +23,11 @@
 //!     validate), and should a check ever fail the complex region is grown by one cell layer and the
 //!     replacement redone, up to `max_region_growth` times. No slivers where avoidable: M's vertices are
 //!     pushed kSnap voxels off the lattice planes before cutting, patch vertices stay kSnap off the lattice
-//!     nodes, kept pieces are fanned from their widest corner, and the cells of tiny kept pieces join the
-//!     region (absorb_sliver_pieces).
+//!     nodes, kept pieces are fanned from their widest corner, the cells of tiny kept pieces join the
+//!     region (absorb_sliver_pieces), and so do the cells of any triangle of the result below
+//!     kMinTriangleArea (absorb_sliver_triangles, up to three rounds; the last valid result is kept).
+//!     Lattice nodes within kSignTolerance of Θ's zero set take the sign M's crossings imply (classify.hpp),
+//!     so that the kSnap push never makes a well-represented cell complex.
 //!  4. Events (§4.4), in this order: the points where the cut subdivides kept triangles (edge splits and
 //!     triangle subdivisions with exact interpolation weights); one PatchDelete per connected patch of
 //!     removed vertices (backward rules by breadth-first march from the kept vertices around it, each

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iterator>
 #include <limits>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -164,14 +165,17 @@ struct Builder {
         }
         if (split_sides == 0) {
           out.triangles.push_back({Q[0], Q[1], Q[2]});
+          tag(Assembly::kIntact);
           ++out.faces_kept;
         } else if (split_sides == 1) {
           fan(Q, opposite_corner(Q));
+          tag(Assembly::kFaceSource | f);
         } else {
           const PointKey ck = other_key(f, 0);
           const Vec3 c = (cut.P[mesh.from_vertex(mesh.halfedge(fh)).idx] + cut.P[mesh.to_vertex(mesh.halfedge(fh)).idx] +
                           cut.P[mesh.to_vertex(mesh.next(mesh.halfedge(fh))).idx]) / 3.0;
           centroid_fan(Q, &ck, &c);
+          tag(Assembly::kFaceSource | f);
         }
         continue;
       }
@@ -184,10 +188,14 @@ struct Builder {
           if (Q.back() == kInvalidIndex) return fail("kept piece with a removed vertex");
         }
         fan(Q, widest_apex(Q));
+        tag(pc.cell);
       }
     }
     return patch();
   }
+
+  // The source of the triangles added since the last call (see Assembly::tri_source).
+  void tag(std::uint64_t source) { out.tri_source.resize(out.triangles.size(), source); }
 
   bool is_corner(Index q) const { return q < out.kept_old.size(); }
   // In a triangle with one subdivided side, the corner opposite that side: both its neighbours in Q are
@@ -223,7 +231,7 @@ struct Builder {
     for (std::uint64_t ck : region) {
       const openvdb::Coord C = cell_from_key(ck);
       std::array<float, 8> val;
-      for (int c = 0; c < 8; ++c) val[c] = acc.getValue(C.offsetBy(c & 1, (c >> 1) & 1, (c >> 2) & 1));
+      for (int c = 0; c < 8; ++c) val[c] = node_value(acc, index, C.offsetBy(c & 1, (c >> 1) & 1, (c >> 2) & 1));
       std::uint8_t mask = 0;
       for (int c = 0; c < 8; ++c)
         if (val[c] < 0.f) mask |= std::uint8_t(1u << c);
@@ -329,6 +337,7 @@ struct Builder {
         } else {
           centroid_fan(Q, nullptr);
         }
+        tag(ck);
       }
     }
     // World positions of everything not kept.
@@ -386,6 +395,34 @@ std::size_t absorb_sliver_pieces(const SurfaceMesh& mesh, const LatticeCut& cut,
     region.erase(std::unique(region.begin(), region.end()), region.end());
   }
   return region.size() - n0;
+}
+
+std::size_t absorb_sliver_triangles(const LatticeCut& cut, const Assembly& A,
+                                    const openvdb::math::Transform& xform, std::vector<std::uint64_t>& region) {
+  const double h = xform.voxelSize()[0];
+  const double limit = 2.0 * kMinTriangleArea * h * h;  // |cross| = twice the area, in world units
+  std::vector<std::uint64_t> add;
+  for (std::size_t t = 0; t < A.triangles.size(); ++t) {
+    const std::uint64_t src = A.tri_source[t];
+    if (src == Assembly::kIntact) continue;
+    const auto& T = A.triangles[t];
+    const Vec3& p = A.positions[T[0]];
+    if ((A.positions[T[1]] - p).cross(A.positions[T[2]] - p).norm() >= limit) continue;
+    if (src & Assembly::kFaceSource) {
+      const Index f = Index(src & ~Assembly::kFaceSource);
+      for (std::uint32_t k = cut.face_pieces[f]; k < cut.face_pieces[f + 1]; ++k) add.push_back(cut.pieces[k].cell);
+    } else {
+      add.push_back(src);
+    }
+  }
+  std::sort(add.begin(), add.end());
+  add.erase(std::unique(add.begin(), add.end()), add.end());
+  std::vector<std::uint64_t> merged;
+  merged.reserve(region.size() + add.size());
+  std::set_union(region.begin(), region.end(), add.begin(), add.end(), std::back_inserter(merged));
+  const std::size_t added = merged.size() - region.size();
+  region.swap(merged);
+  return added;
 }
 
 std::vector<std::uint64_t> grow_region(const std::vector<std::uint64_t>& region) {

@@ -18,6 +18,10 @@ namespace topotrack::topology {
 struct Assembly {
   std::vector<Vec3> positions;  //!< world space
   std::vector<std::array<Index, 3>> triangles;
+  //! Per triangle, where it comes from: a cell key (a kept piece of M or a patch polygon in that cell),
+  //! kFaceSource | face (a triangle of M re-fanned because an edge of it was split), or kIntact.
+  std::vector<std::uint64_t> tri_source;
+  static constexpr std::uint64_t kFaceSource = std::uint64_t(1) << 63, kIntact = ~std::uint64_t(0);
   std::vector<Index> kept_old;
   std::vector<PointKey> derived;
   std::size_t n_patch = 0;
@@ -42,6 +46,18 @@ inline constexpr double kMinKeptPieceArea = 1e-6;
 //! lattice line, would be kept as a sliver; replacing its cell too costs a few patch triangles. Returns the
 //! number of cells added.
 std::size_t absorb_sliver_pieces(const SurfaceMesh& mesh, const LatticeCut& cut, std::vector<std::uint64_t>& region);
+
+//! Index-space area (voxels squared) below which a triangle of the replacement is a sliver.
+inline constexpr double kMinTriangleArea = 2e-6;
+
+//! Add to `region` (sorted keys, kept sorted) the cells whose triangles in `A` (built for `region`) are
+//! slivers, smaller than kMinTriangleArea: the cell of a kept piece or of a patch polygon, every cell of a
+//! re-fanned triangle of M. Where an edge or a face of M passes within a hair of a lattice line or node, the
+//! corners of the pieces there nearly meet, and no triangulation of them avoids a sliver; replacing those
+//! cells too (Wojtan et al. 2009 snap such near-coincident points instead) moves the patch boundary away.
+//! Returns the number of cells added.
+std::size_t absorb_sliver_triangles(const LatticeCut& cut, const Assembly& A,
+                                    const openvdb::math::Transform& xform, std::vector<std::uint64_t>& region);
 
 //! `region` grown by one layer of cells (26-neighbourhood).
 std::vector<std::uint64_t> grow_region(const std::vector<std::uint64_t>& region);

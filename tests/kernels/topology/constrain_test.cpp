@@ -15,6 +15,7 @@
 #include "kernels/propagate/propagate.hpp"
 #include "kernels/sdf/marching_cubes.hpp"
 #include "kernels/sdf/signed_distance.hpp"
+#include "kernels/topology/classify.hpp"
 #include "kernels/topology/lattice_cut.hpp"
 #include "tests/kernels/topology/self_intersection.hpp"
 #include "tests/support/test_meshes.hpp"
@@ -75,6 +76,63 @@ TEST(ConstrainTopology, MatchingMeshIsLeftUnchanged) {
   EXPECT_TRUE(ev.empty());
   EXPECT_EQ(m.positions(), before);
   EXPECT_EQ(m.ids(), ids);
+}
+
+// Whether M crosses one of the twelve edges of `cell` more than once (Wojtan et al.'s edge test: a fold or a
+// near-tangency that no marching-cubes polygon can represent).
+bool has_multiply_crossed_edge(const topology::LatticeCut& cut, const topology::CellIndex& index, std::uint64_t cell) {
+  using namespace topology;
+  const openvdb::Coord C = cell_from_key(cell);
+  std::vector<std::pair<int, Index>> crossings;  // (cube edge, face)
+  const auto [pb, pe] = index.pieces_of(cell);
+  for (std::uint32_t k = pb; k < pe; ++k) {
+    const Piece& pc = cut.pieces[index.piece_order[k]];
+    for (int i = 0; i < pc.size; ++i) {
+      const PointKey& key = cut.keys[pc.begin + i];
+      if (kind(key) != PointKind::FacePoint) continue;
+      const int L = key_axis(key), ua = L == 0 ? 1 : 0, va = L == 2 ? 1 : 2;
+      crossings.emplace_back(4 * L + (key_plane_u(key) - C[ua]) + 2 * (key_plane_v(key) - C[va]), key_element(key));
+    }
+  }
+  std::sort(crossings.begin(), crossings.end());
+  crossings.erase(std::unique(crossings.begin(), crossings.end()), crossings.end());
+  for (std::size_t i = 1; i < crossings.size(); ++i)
+    if (crossings[i].first == crossings[i - 1].first) return true;
+  return false;
+}
+
+// A clean mesh that is not aligned with Θ's lattice, constrained to its own signed distance (exact signs
+// near the surface, as the tracker computes φ_M), is well represented wherever M crosses each lattice edge
+// at most once: the only complex cells left are those of Wojtan et al.'s edge test (M crossing an edge
+// twice where it is nearly tangent to it). Before lattice nodes within kSignTolerance of the surface took
+// M's side, every node that the cut's kSnap push moved M across made its cells complex (here 384 of 564
+// complex cells; in the blobs demo 28-64 per frame and 1.6 % new vertices per frame).
+TEST(ConstrainTopology, CleanMeshAgainstItsOwnDistanceIsComplexOnlyAtMultipleCrossings) {
+  using namespace topology;
+  SyntheticParams sp;
+  sp.kind = SyntheticKind::kBlobs;
+  sp.frames = 3;
+  const SyntheticScene scene(sp);
+  std::size_t complex = 0, sign_only = 0, cells = 0;
+  for (int n = 1; n <= 3; n += 2) {
+    const SurfaceMesh src = to_surface_mesh(scene.frame_mesh(n));
+    const double h = mean_edge_length(src);
+    for (int k = 0; k < 3; ++k) {
+      // Off the generator's lattice, and off Θ's by a different fraction of a voxel each time.
+      SurfaceMesh m = src.clone();
+      const Vec3 shift = h * Vec3(0.131 * k + 0.05, 0.071 * k + 0.02, 0.213 * k + 0.01);
+      for (Index i = 0; i < m.vertices_size(); ++i) m.position(Vertex(i)) += shift;
+      const GridPtr phi = signed_distance(m, h * (1.0 + 0.07 * k), 3.0, 0.25);
+      const LatticeCut cut = cut_by_lattice(m, phi->transform());
+      const CellIndex index = index_cells(cut, *phi);
+      const std::vector<std::uint64_t> bad = complex_cells(m, cut, index, *phi);
+      cells += index.cells.size();
+      complex += bad.size();
+      for (std::uint64_t c : bad) sign_only += !has_multiply_crossed_edge(cut, index, c);
+    }
+  }
+  EXPECT_EQ(sign_only, 0u) << complex << " complex of " << cells << " cells";
+  EXPECT_LT(complex, cells / 250);  // 180 of 101540 now, 564 before
 }
 
 TEST(ConstrainTopology, SphereSplitsIntoTwo) {
@@ -292,14 +350,13 @@ void check_sequence(SyntheticKind kind, int frames) {
     EXPECT_EQ(connected_components(m), connected_components(next));
     EXPECT_EQ(euler_characteristic(m), euler_characteristic(next));
     EXPECT_EQ(test::count_self_intersections(m), 0u);
-    // Slivers: the patch keeps its vertices kSnap off the lattice nodes, M's vertices are pushed kSnap off
-    // the planes and tiny pieces of M are absorbed into the patch (lattice_cut.hpp, replace.hpp). Before,
-    // frames of this kind (M's vertices on Θ's own lattice lines, the hardest case for exact cutting) had
-    // triangles down to 1e-13 of the mean area. What is left (one frame, ~1e-8): corners of M's pieces where
-    // an edge of M passes within ~1e-4 voxel of a lattice line, and patch triangles cutting off a lattice node
-    // that M passes as closely; 1e-6 is not reached for these yet.
+    // Slivers (#5: no triangle below 1e-6 of the mean area): the patch keeps its vertices kSnap off the
+    // lattice nodes, M's vertices are pushed kSnap off the planes, tiny pieces of M are absorbed into the
+    // patch, and the cells of any triangle below kMinTriangleArea join the region (replace.hpp). These frames
+    // (M's vertices on Θ's own lattice lines, the hardest case for exact cutting) had triangles down to 1e-13
+    // of the mean area two sessions ago, 1.5e-8 before absorb_sliver_triangles; now >= 4e-6.
     if (r.complex_cells > 0) {
-      EXPECT_GE(min_area_ratio(m), 1e-8);
+      EXPECT_GE(min_area_ratio(m), 1e-6);
     }
   }
   EXPECT_GT(changed, 0u);
