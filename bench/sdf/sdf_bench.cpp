@@ -55,36 +55,10 @@ void BM_SignedDistance(benchmark::State& state) {
   state.counters["active_voxels"] = double(voxels);
 }
 
-// The tracker's configuration (profiles/default.json: half width 3, exact sign within 0.25 voxel, §4.3),
-// with the half width as the second argument in tenths of a voxel (what the consumers need is measured
-// against it).
-void BM_SignedDistanceTracker(benchmark::State& state) {
+// Times signed_distance with `p` (its voxel size set to the input's edge length) and reports the split.
+void run_signed_distance(benchmark::State& state, SignedDistanceParams p) {
   const Input in = bumpy_torus(state.range(0));
-  SignedDistanceParams p;
   p.voxel_size = in.edge;
-  p.half_width_voxels = double(state.range(1)) / 10;
-  p.exact_sign_band_voxels = 0.25;
-  SignedDistanceReport r;
-  for (auto _ : state) {
-    auto grid = signed_distance(in.positions, in.triangles, p, &r);
-    benchmark::DoNotOptimize(grid);
-  }
-  state.counters["vertices"] = double(in.positions.size());
-  state.counters["active_voxels"] = double(r.active_voxels);
-  state.counters["seconds_volume"] = r.seconds_volume;
-  state.counters["seconds_sign"] = r.seconds_sign;
-}
-
-// Resurfacing's configuration (kernels/gen/resurface.hpp): winding-number sign within 3 voxels and
-// thin parts thickened to 2 voxels.
-void BM_SignedDistanceResurface(benchmark::State& state) {
-  const Input in = bumpy_torus(state.range(0));
-  SignedDistanceParams p;
-  p.voxel_size = in.edge;
-  p.half_width_voxels = 3;
-  p.exact_sign_band_voxels = 3;
-  p.sign_method = SignMethod::kWindingNumber;
-  p.min_thickness_voxels = 2;
   SignedDistanceReport r;
   for (auto _ : state) {
     auto grid = signed_distance(in.positions, in.triangles, p, &r);
@@ -95,6 +69,27 @@ void BM_SignedDistanceResurface(benchmark::State& state) {
   state.counters["seconds_volume"] = r.seconds_volume;
   state.counters["seconds_sign"] = r.seconds_sign;
   state.counters["seconds_thicken"] = r.seconds_thicken;
+}
+
+// The tracker's configuration (profiles/default.json: half width 3, exact sign within 0.25 voxel, §4.3),
+// with the half width as the second argument in tenths of a voxel (what the consumers need is measured
+// against it).
+void BM_SignedDistanceTracker(benchmark::State& state) {
+  SignedDistanceParams p;
+  p.half_width_voxels = double(state.range(1)) / 10;
+  p.exact_sign_band_voxels = 0.25;
+  run_signed_distance(state, p);
+}
+
+// Resurfacing's configuration (kernels/gen/resurface.hpp): winding-number sign within 3 voxels and
+// thin parts thickened to 1.75 voxels (ResurfaceParams' defaults).
+void BM_SignedDistanceResurface(benchmark::State& state) {
+  SignedDistanceParams p;
+  p.half_width_voxels = 3;
+  p.exact_sign_band_voxels = 3;
+  p.sign_method = SignMethod::kWindingNumber;
+  p.min_thickness_voxels = 1.75;
+  run_signed_distance(state, p);
 }
 
 void BM_MarchingCubes(benchmark::State& state) {
