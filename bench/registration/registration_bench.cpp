@@ -7,15 +7,24 @@
 // Counters: vertices, nodes, rounds, PCG iterations and the seconds of graph, correspondences,
 // assembly, factorisation and solve (coarse) and ray casting, assembly and solve (fine). "CPU" is the
 // process CPU time (all threads); the machine's load inflates "Time" (wall clock), so compare rows of
-// one run. BM_Factorisation: the two Cholesky backends on the same Gauss–Newton systems (one round each).
+// one run. BM_Factorisation: the two Cholesky backends on the same Gauss–Newton systems (one round of the
+// direct solve each). BM_BlockCholeskySolve / BM_BlockCholeskyFactorize: the PCG preconditioner's factor
+// (4 x 4 blocks) on the deformation graph, with 1 or 2 threads, "fastest_ms" the least disturbed run;
+// BM_CholmodFactorize: CHOLMOD on the same matrices.
 // Run: registration_bench --benchmark_format=json [--benchmark_filter=...]
 #include <benchmark/benchmark.h>
+#include <tbb/global_control.h>
 
+#include <algorithm>
+#include <chrono>
 #include <map>
 #include <memory>
 #include <tuple>
 
+#include "kernels/mesh/mesh_queries.hpp"
+#include "kernels/registration/block_cholesky.hpp"
 #include "kernels/registration/coarse.hpp"
+#include "kernels/registration/deformation_graph.hpp"
 #include "kernels/registration/fine.hpp"
 #include "tests/kernels/registration/real_data.hpp"
 
@@ -60,6 +69,7 @@ void BM_AlignCoarseFine(benchmark::State& state) {
   state.counters["rounds"] = c.iterations;
   state.counters["levels"] = c.levels;
   state.counters["pcg_iterations"] = c.pcg_iterations;
+  state.counters["factor_nnz"] = double(c.factor_nonzeros);
   state.counters["coarse_s"] = c.seconds_total;
   state.counters["coarse_graph_s"] = c.seconds_graph;
   state.counters["coarse_corr_s"] = c.seconds_correspondences;
@@ -90,6 +100,7 @@ void BM_Factorisation(benchmark::State& state) {
   const Fixture& f = fixture(int(state.range(0)), 15);
   CoarseParams p;
   p.solver = state.range(1) ? CholeskyBackend::Cholmod : CholeskyBackend::EigenLDLT;
+  p.linear_solver = CoarseLinearSolver::Direct;  // the backend serves the direct solve only
   p.max_iterations = 1;
   CoarseReport c;
   for (auto _ : state) {
@@ -112,6 +123,87 @@ BENCHMARK(BM_Factorisation)
     ->Iterations(1)
     ->Repetitions(3)
     ->ReportAggregatesOnly(true);
+
+// One preconditioner solve (4N x 3, the per-coordinate factor of the PCG path) on the deformation graph
+// of the source mesh, for a graph Laplacian plus a diagonal shift in 4 x 4 blocks (the pattern is what
+// matters for the cost).
+struct BlockSystem {
+  DeformationGraph graph;
+  BlockCholesky::Matrix lower;
+};
+
+BlockSystem block_system(int size) {
+  const Fixture& f = fixture(size, 15);
+  DeformationGraph g = build_deformation_graph(f.source, 4 * mean_edge_length(f.source), 4);
+  const int N = int(g.n_nodes());
+  std::vector<Eigen::Triplet<double, int>> t;
+  for (int j = 0; j < N; ++j) {
+    const double deg = double(g.neighbor_offset[std::size_t(j) + 1] - g.neighbor_offset[std::size_t(j)]);
+    for (int r = 0; r < 4; ++r)
+      for (int c = 0; c <= r; ++c) t.emplace_back(4 * j + r, 4 * j + c, r == c ? deg + 1 : 0.1);
+    for (Index q = g.neighbor_offset[std::size_t(j)]; q < g.neighbor_offset[std::size_t(j) + 1]; ++q)
+      if (int(g.neighbors[q]) > j)
+        for (int r = 0; r < 4; ++r) t.emplace_back(4 * int(g.neighbors[q]) + r, 4 * j + r, -1.0);
+  }
+  BlockCholesky::Matrix lower(4 * N, 4 * N);
+  lower.setFromTriplets(t.begin(), t.end());
+  return {std::move(g), std::move(lower)};
+}
+
+void BM_BlockCholeskySolve(benchmark::State& state) {
+  const BlockSystem sys = block_system(int(state.range(0)));
+  const tbb::global_control threads(tbb::global_control::max_allowed_parallelism, std::size_t(state.range(1)));
+  const int N = int(sys.graph.n_nodes());
+  BlockCholesky chol;
+  chol.analyze(sys.graph.neighbor_offset, sys.graph.neighbors);
+  chol.factorize(sys.lower);
+  std::vector<double> x(std::size_t(12) * std::size_t(N), 1.0);
+  double fastest = 1e30;  // the least disturbed run: robust when the machine is shared
+  for (auto _ : state) {
+    std::fill(x.begin(), x.end(), 1.0);
+    const auto t0 = std::chrono::steady_clock::now();
+    chol.solve3(x.data());
+    benchmark::DoNotOptimize(x.data());
+    fastest = std::min(fastest, std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+  }
+  state.counters["fastest_ms"] = fastest;
+  state.counters["nodes"] = N;
+  state.counters["factor_nnz"] = double(chol.factor_nonzeros());
+}
+// {size, threads}
+BENCHMARK(BM_BlockCholeskySolve)->ArgsProduct({{0, 2, 3}, {1, 2}})->ArgNames({"size", "threads"})->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime();
+
+// One numeric factorisation of the same systems (the symbolic analysis is done once per graph).
+void BM_BlockCholeskyFactorize(benchmark::State& state) {
+  const BlockSystem sys = block_system(int(state.range(0)));
+  const tbb::global_control threads(tbb::global_control::max_allowed_parallelism, std::size_t(state.range(1)));
+  BlockCholesky chol;
+  chol.analyze(sys.graph.neighbor_offset, sys.graph.neighbors);
+  double fastest = 1e30;
+  for (auto _ : state) {
+    const auto t0 = std::chrono::steady_clock::now();
+    chol.factorize(sys.lower);
+    fastest = std::min(fastest, std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+  }
+  state.counters["fastest_ms"] = fastest;
+  state.counters["nodes"] = double(sys.graph.n_nodes());
+  state.counters["factor_nnz"] = double(chol.factor_nonzeros());
+}
+BENCHMARK(BM_BlockCholeskyFactorize)->ArgsProduct({{0, 2, 3}, {1, 2}})->ArgNames({"size", "threads"})->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime();
+
+// CHOLMOD (supernodal, its own ordering) on the same systems, for comparison.
+void BM_CholmodFactorize(benchmark::State& state) {
+  const BlockSystem sys = block_system(int(state.range(0)));
+  SparseCholesky chol(CholeskyBackend::Cholmod);
+  chol.analyze(sys.lower);
+  for (auto _ : state) chol.factorize(sys.lower);
+  state.counters["factor_nnz"] = double(chol.factor_nonzeros());
+  const Eigen::MatrixXd b = Eigen::MatrixXd::Ones(sys.lower.rows(), 3);
+  const auto t0 = std::chrono::steady_clock::now();
+  for (int i = 0; i < 10; ++i) benchmark::DoNotOptimize(chol.solve(b).data());
+  state.counters["solve_ms"] = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count() / 10;
+}
+BENCHMARK(BM_CholmodFactorize)->Arg(0)->Arg(2)->Arg(3)->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime();
 
 }  // namespace
 }  // namespace topotrack

@@ -8,6 +8,7 @@
 #include <cmath>
 
 #include "kernels/mesh/mesh_queries.hpp"
+#include "kernels/registration/block_cholesky.hpp"
 #include "kernels/registration/correspondences.hpp"
 #include "kernels/registration/deformation_graph.hpp"
 
@@ -169,18 +170,32 @@ Eigen::Matrix4d coordinate_average(const Mat12& M) {
   return out;
 }
 
-// Fill H (lower triangle) and the gradient g = J^T r for the current state; each node writes its own
-// columns and entries, so the result does not depend on the scheduling.
+// The Gauss–Newton matrix of the PCG path, without storing its off-diagonal blocks: the 12 x 12 node
+// blocks D_j, and the smoothness coupling of neighbours j, k, which only depends on alpha_reg and
+// d = g_k - g_j: (H x)_j gets, from x_k, -w d_m b_k in column m of A_j and
+// w (sum_m d_m a_m,k) - 2 w b_k in b_j.
+struct NodeSystem {
+  std::vector<Mat12> diag, diag_inverse;
+  double smooth = 0;
+};
+
+// Fill the gradient g = J^T r and either the lower triangle of H (`full`, the direct path) or the node
+// blocks with the per-coordinate matrix (`nodes`, `precond`: the PCG path) for the current state; each
+// node writes its own columns and entries, so the result does not depend on the scheduling.
 void assemble(const Problem& p, const std::vector<NodeState>& s, const std::vector<Correspondence>& corr,
-              const Weights& w, SystemPattern& sp, SystemPattern* precond, std::vector<Mat12>* block_inverse,
-              Eigen::VectorXd& grad) {
+              const Weights& w, SystemPattern* full, SystemPattern* precond, NodeSystem* nodes, Eigen::VectorXd& grad) {
   const DeformationGraph& g = p.graph;
   const std::size_t nn = g.n_nodes();
   grad.setZero(Eigen::Index(12 * nn));
-  double* values = sp.H.valuePtr();
-  const int* outer = sp.H.outerIndexPtr();
+  double* values = full ? full->H.valuePtr() : nullptr;
+  const int* outer = full ? full->H.outerIndexPtr() : nullptr;
   double* pvalues = precond ? precond->H.valuePtr() : nullptr;
   const int* pouter = precond ? precond->H.outerIndexPtr() : nullptr;
+  if (nodes) {
+    nodes->diag.resize(nn);
+    nodes->diag_inverse.resize(nn);
+    nodes->smooth = w.smooth;
+  }
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nn, 32), [&](const auto& range) {
     for (std::size_t j = range.begin(); j != range.end(); ++j) {
       Mat12 D = Mat12::Zero();
@@ -241,11 +256,15 @@ void assemble(const Problem& p, const std::vector<NodeState>& s, const std::vect
       for (int c = 9; c < 12; ++c) D(c, c) += w.damping_b;
 
       grad.segment<12>(Eigen::Index(12 * j)) = gj;
-      for (int a = 0; a < 12; ++a) {
-        int pos = outer[12 * j + a];
-        for (int r = a; r < 12; ++r) values[pos++] = D(r, a);
+      if (nodes) {
+        nodes->diag[j] = D;
+        nodes->diag_inverse[j] = D.ldlt().solve(Mat12::Identity());
       }
-      if (block_inverse) (*block_inverse)[j] = D.ldlt().solve(Mat12::Identity());
+      if (values)
+        for (int a = 0; a < 12; ++a) {
+          int pos = outer[12 * j + a];
+          for (int r = a; r < 12; ++r) values[pos++] = D(r, a);
+        }
       if (precond) {
         const Eigen::Matrix4d P = coordinate_average(D);
         for (int a = 0; a < 4; ++a) {
@@ -253,6 +272,7 @@ void assemble(const Problem& p, const std::vector<NodeState>& s, const std::vect
           for (int r = a; r < 4; ++r) pvalues[pos++] = P(r, a);
         }
       }
+      if (!values && !precond) continue;
       // Off-diagonal blocks H_kj (rows: unknowns of k > j, columns: unknowns of j).
       int m = 0;
       for (Index q = g.neighbor_offset[j]; q < g.neighbor_offset[j + 1]; ++q) {
@@ -265,10 +285,11 @@ void assemble(const Problem& p, const std::vector<NodeState>& s, const std::vect
         // k -> j: J_k = [-d0 I, -d1 I, -d2 I, I] (its edge vector is -d), J_j = [0, 0, 0, -I]  =>  columns b_j.
         for (int c1 = 0; c1 < 4; ++c1)
           B.block<3, 3>(3 * c1, 9).diagonal().array() -= w.smooth * (c1 < 3 ? -d[c1] : 1.0);
-        for (int a = 0; a < 12; ++a) {
-          const int pos = outer[12 * j + a] + (12 - a) + 12 * m;
-          for (int r = 0; r < 12; ++r) values[pos + r] = B(r, a);
-        }
+        if (values)
+          for (int a = 0; a < 12; ++a) {
+            const int pos = outer[12 * j + a] + (12 - a) + 12 * m;
+            for (int r = 0; r < 12; ++r) values[pos + r] = B(r, a);
+          }
         if (precond) {
           const Eigen::Matrix4d P = coordinate_average(B);
           for (int a = 0; a < 4; ++a) {
@@ -282,73 +303,73 @@ void assemble(const Problem& p, const std::vector<NodeState>& s, const std::vect
   });
 }
 
-// Solve H x = rhs (H given by its lower triangle) by preconditioned conjugate gradients. The
-// preconditioner is a symmetric multiplicative two-level scheme: node-block Jacobi (the exact 12 x 12
-// diagonal blocks, which hold the stiff rigidity coupling of x, y, z within a node), then a coarse
-// correction by the Cholesky factor of the per-coordinate matrix P (the coupling between nodes), then
-// block Jacobi again.
-int preconditioned_cg(const SparseCholesky::Matrix& H, const SparseCholesky& P, const std::vector<Mat12>& block_inverse,
+// y = H x, matrix-free off the diagonal (see NodeSystem); parallel over nodes, each writes its own rows.
+void apply_system(const DeformationGraph& g, const NodeSystem& sys, const Eigen::VectorXd& x, Eigen::VectorXd& y) {
+  const std::size_t nn = g.n_nodes();
+  y.resize(x.size());
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nn, 128), [&](const auto& range) {
+    for (std::size_t j = range.begin(); j != range.end(); ++j) {
+      Vec12 yj = sys.diag[j] * x.segment<12>(Eigen::Index(12 * j));
+      const Vec3& gj = g.node_position[j];
+      for (Index q = g.neighbor_offset[j]; q < g.neighbor_offset[j + 1]; ++q) {
+        const Index k = g.neighbors[q];
+        const Vec3 d = g.node_position[k] - gj;
+        const auto xk = x.segment<12>(Eigen::Index(12 * k));
+        const Vec3 bk = xk.tail<3>();
+        for (int m = 0; m < 3; ++m) yj.segment<3>(3 * m) -= sys.smooth * d[m] * bk;
+        yj.tail<3>() += sys.smooth * (d[0] * xk.segment<3>(0) + d[1] * xk.segment<3>(3) + d[2] * xk.segment<3>(6) - 2 * bk);
+      }
+      y.segment<12>(Eigen::Index(12 * j)) = yj;
+    }
+  });
+}
+
+// Solve H x = rhs by preconditioned conjugate gradients. The preconditioner is a symmetric
+// multiplicative two-level scheme: node-block Jacobi (the exact 12 x 12 diagonal blocks, which hold
+// the stiff rigidity coupling of x, y, z within a node), then a coarse correction by the Cholesky
+// factor of the per-coordinate matrix P (the coupling between nodes), then block Jacobi again. The
+// node's 12 unknowns (a1, a2, a3, b) are 4 rows of (x, y, z), so a vector is already P's 4N x 3
+// right-hand side, row-major.
+int preconditioned_cg(const DeformationGraph& g, const NodeSystem& sys, const BlockCholesky& P,
                       const Eigen::VectorXd& rhs, double tolerance, int max_iterations, Eigen::VectorXd& x) {
   const Eigen::Index nn = rhs.size() / 12;
-  Eigen::MatrixXd U(4 * nn, 3);
-  auto apply_separable = [&](const Eigen::VectorXd& r) {
-    for (Eigen::Index j = 0; j < nn; ++j)
-      for (int c = 0; c < 3; ++c)
-        for (int m = 0; m < 4; ++m) U(4 * j + m, c) = r[12 * j + unknown(m, c)];
-    const Eigen::MatrixXd Z = P.solve(U);
-    Eigen::VectorXd z(rhs.size());
-    for (Eigen::Index j = 0; j < nn; ++j)
-      for (int c = 0; c < 3; ++c)
-        for (int m = 0; m < 4; ++m) z[12 * j + unknown(m, c)] = Z(4 * j + m, c);
-    return z;
-  };
-  auto apply_blocks = [&](const Eigen::VectorXd& r) {
-    Eigen::VectorXd z(r.size());
+  Eigen::VectorXd t(rhs.size()), Ht(rhs.size());
+  auto apply_blocks = [&](const Eigen::VectorXd& r, Eigen::VectorXd& z, bool add) {
     tbb::parallel_for(tbb::blocked_range<Eigen::Index>(0, nn, 256), [&](const auto& range) {
-      for (Eigen::Index j = range.begin(); j != range.end(); ++j)
-        z.segment<12>(12 * j) = block_inverse[std::size_t(j)] * r.segment<12>(12 * j);
-    });
-    return z;
-  };
-  // Both triangles of H once per solve; as H is symmetric, column j dotted with v is (H v)_j, so the
-  // product runs in parallel over columns with a fixed summation order.
-  // Structural zeros of the 12 x 12 blocks (more than half of each off-diagonal block) are dropped.
-  SparseCholesky::Matrix F = H.selfadjointView<Eigen::Lower>();
-  F.prune(0.0);
-  auto apply_h = [&](const Eigen::VectorXd& v) {
-    Eigen::VectorXd y(v.size());
-    const int* outer = F.outerIndexPtr();
-    const int* inner = F.innerIndexPtr();
-    const double* val = F.valuePtr();
-    tbb::parallel_for(tbb::blocked_range<Eigen::Index>(0, v.size(), 512), [&](const auto& range) {
       for (Eigen::Index j = range.begin(); j != range.end(); ++j) {
-        double sum = 0;
-        for (int q = outer[j]; q < outer[j + 1]; ++q) sum += val[q] * v[inner[q]];
-        y[j] = sum;
+        const Vec12 zj = sys.diag_inverse[std::size_t(j)] * r.segment<12>(12 * j);
+        if (add) z.segment<12>(12 * j) += zj;
+        else z.segment<12>(12 * j) = zj;
       }
     });
-    return y;
   };
-  auto precondition = [&](const Eigen::VectorXd& r) {
-    Eigen::VectorXd z = apply_blocks(r);
-    z += apply_separable(r - apply_h(z));
-    z += apply_blocks(r - apply_h(z));
-    return z;
+  auto precondition = [&](const Eigen::VectorXd& r, Eigen::VectorXd& z) {
+    z.resize(r.size());
+    apply_blocks(r, z, false);
+    apply_system(g, sys, z, Ht);
+    t = r - Ht;
+    P.solve3(t.data());
+    z += t;
+    apply_system(g, sys, z, Ht);
+    t = r - Ht;
+    apply_blocks(t, z, true);
   };
   x.setZero(rhs.size());
   const double rhs_norm = rhs.norm();
   if (!(rhs_norm > 0)) return 0;
-  Eigen::VectorXd r = rhs, z = precondition(r), p = z, Hp;
+  Eigen::VectorXd r = rhs, z, p, Hp;
+  precondition(r, z);
+  p = z;
   double rz = r.dot(z);
   int it = 0;
   while (it < max_iterations && r.norm() > tolerance * rhs_norm) {
-    Hp = apply_h(p);
+    apply_system(g, sys, p, Hp);
     const double pHp = p.dot(Hp);
     if (!(pHp > 0)) break;
     const double alpha = rz / pHp;
     x += alpha * p;
     r -= alpha * Hp;
-    z = precondition(r);
+    precondition(r, z);
     const double rz_new = r.dot(z);
     p = z + (rz_new / rz) * p;
     rz = rz_new;
@@ -366,7 +387,7 @@ CoarseReport align_coarse(SurfaceMesh& mesh, const TargetSurface& target, const 
       !(params.alpha_reg_start > 0) || !(params.alpha_reg_min > 0) || !(params.alpha_fit >= 0) ||
       !(params.alpha_point >= 0) || !(params.alpha_plane >= 0) || params.max_iterations < 0 ||
       params.max_iterations_per_level < 1 || !(params.damping > 0) || !(params.step_tolerance >= 0) ||
-      !(params.fit_tolerance >= 0))
+      !(params.fit_tolerance >= 0) || !(params.stall_ratio >= 0))
     TT_THROW(InvalidInput, "align_coarse: invalid parameters");
   if (mesh.n_vertices() == 0 || mesh.n_faces() == 0) TT_THROW(InvalidInput, "align_coarse: empty mesh");
 
@@ -389,14 +410,16 @@ CoarseReport align_coarse(SurfaceMesh& mesh, const TargetSurface& target, const 
   rep.graph_edges = int(graph.edges.size());
   rep.node_spacing = spacing;
   const bool direct = params.linear_solver == CoarseLinearSolver::Direct;
-  SystemPattern pattern = build_pattern(graph, 12);
+  SystemPattern pattern = direct ? build_pattern(graph, 12) : SystemPattern{};
   SystemPattern precond = direct ? SystemPattern{} : build_pattern(graph, 4);
   SparseCholesky solver(params.solver);
   rep.seconds_graph = seconds_since(t0);
   t0 = Clock::now();
-  solver.analyze(direct ? pattern.H : precond.H);
+  BlockCholesky block_solver;
+  if (direct) solver.analyze(pattern.H);
+  else block_solver.analyze(graph.neighbor_offset, graph.neighbors);
   bool refactor = true;
-  std::vector<Mat12> block_inverse(direct ? 0 : nn);
+  NodeSystem node_system;
   rep.seconds_factorisation += seconds_since(t0);
 
   CorrespondenceParams cparams;
@@ -444,12 +467,15 @@ CoarseReport align_coarse(SurfaceMesh& mesh, const TargetSurface& target, const 
       rep.fit_start = before.fit;
       first = false;
     }
-    assemble(problem, state, corr, w, pattern, direct ? nullptr : &precond, direct ? nullptr : &block_inverse, grad);
+    assemble(problem, state, corr, w, direct ? &pattern : nullptr, direct ? nullptr : &precond,
+             direct ? nullptr : &node_system, grad);
     rep.seconds_assembly += seconds_since(t0);
     if (direct || refactor || params.refactor_each_round) {
       t0 = Clock::now();
-      solver.factorize(direct ? pattern.H : precond.H);
+      if (direct) solver.factorize(pattern.H);
+      else block_solver.factorize(precond.H);
       ++rep.factorisations;
+      rep.factor_nonzeros = direct ? solver.factor_nonzeros() : block_solver.factor_nonzeros();
       refactor = false;
       rep.seconds_factorisation += seconds_since(t0);
     }
@@ -458,8 +484,8 @@ CoarseReport align_coarse(SurfaceMesh& mesh, const TargetSurface& target, const 
     int pcg_iterations = 0;
     if (direct) delta = solver.solve(Eigen::VectorXd(-grad));
     else
-      pcg_iterations =
-          preconditioned_cg(pattern.H, solver, block_inverse, -grad, params.pcg_tolerance, params.max_pcg_iterations, delta);
+      pcg_iterations = preconditioned_cg(graph, node_system, block_solver, -grad, params.pcg_tolerance,
+                                         params.max_pcg_iterations, delta);
     rep.pcg_iterations += pcg_iterations;
     rep.seconds_solve += seconds_since(t0);
 
@@ -505,7 +531,7 @@ CoarseReport align_coarse(SurfaceMesh& mesh, const TargetSurface& target, const 
     // sets, and a round that gains correspondences raises the energy while making progress.)
     const bool converged = !accepted ||
                            before.total - after.total <= params.convergence_tolerance * before.total ||
-                           motion <= params.step_tolerance * edge;
+                           motion <= params.step_tolerance * edge || motion < params.stall_ratio * fit_distance;
     if (converged || level_iterations >= params.max_iterations_per_level) {
       if (converged && fit_distance <= params.fit_tolerance * edge) break;
       alpha_reg /= 10;

@@ -18,9 +18,10 @@ namespace topotrack {
 //! SeparablePCG: conjugate gradients on the same system to `pcg_tolerance`, preconditioned by a
 //! sparse Cholesky of its 4N x 4N per-coordinate part (smoothness, point-to-point, coordinate-averaged
 //! rigidity and point-to-plane: exact but for the within-node coupling of x, y, z), factored once per
-//! alpha_reg level: 27x fewer factorisation flops, same solution to the tolerance. The coupling within
-//! a node is handled by a symmetric multiplicative two-level preconditioner (node-block Jacobi around
-//! the per-coordinate Cholesky correction).
+//! alpha_reg level by BlockCholesky (4 x 4 node blocks, one triangular solve for x, y and z): 27x fewer
+//! factorisation flops, same solution to the tolerance. The coupling within a node is handled by a
+//! symmetric multiplicative two-level preconditioner (node-block Jacobi around the per-coordinate
+//! Cholesky correction); the 12N matrix is applied node by node without storing its off-diagonal blocks.
 enum class CoarseLinearSolver { Direct, SeparablePCG };
 
 struct CoarseParams {
@@ -46,6 +47,13 @@ struct CoarseParams {
   double convergence_tolerance = 2e-3;
   //! Node motion of a round (|db_j| + spacing |dA_j|_F) below which it has converged, in mean edge lengths.
   double step_tolerance = 0.01;
+  //! A level has also converged when the largest node motion of a round is below this fraction of the
+  //! mean node-to-correspondence distance after it (our addition): the regularisation holds the nodes
+  //! back and further rounds at this alpha_reg only crawl (consecutive blobs frames: 8 rounds at
+  //! alpha_reg 100, each moving 0.5 of 3 edge lengths). Measured with 0.25: samba, pcow, elephant 1 -> 16
+  //! unchanged (pcow 19 rounds instead of 25); blobs tracker 20 frames 15.9 rounds/frame instead of 19.4,
+  //! new vertices 0.65 vs 0.68 %/frame, but final drift 0.042 vs 0.032 % of the diagonal: off by default.
+  double stall_ratio = 0;
   //! Stop relaxing alpha_reg once a level has converged with the mean node-to-correspondence distance
   //! below this many mean edge lengths (our addition): with the fit residual (hence its gradient) at
   //! zero a lower alpha_reg has nothing left to fit. 0 always runs down to alpha_reg_min.
@@ -55,7 +63,7 @@ struct CoarseParams {
   //! Levenberg–Marquardt damping of the step (relative units): keeps the system positive definite
   //! where a component has no correspondence at all.
   double damping = 1e-6;
-  CholeskyBackend solver = kDefaultCholeskyBackend;
+  CholeskyBackend solver = kDefaultCholeskyBackend;  //!< Direct only (SeparablePCG: BlockCholesky)
   CoarseLinearSolver linear_solver = CoarseLinearSolver::SeparablePCG;  //!< measured faster (bench)
   //! Relative residual of the Gauss–Newton system (SeparablePCG): an inexact Newton step, 1e-3 gives
   //! the same alignment as 1e-4 with a third fewer PCG iterations (measured on samba and pcow).
@@ -85,6 +93,7 @@ struct CoarseReport {
   int nodes = 0;
   int graph_edges = 0;
   int factorisations = 0;
+  std::size_t factor_nonzeros = 0;  //!< entries of the Cholesky factor L (the last factorisation)
   int pcg_iterations = 0;     //!< summed over rounds (SeparablePCG)
   double node_spacing = 0;
   double alpha_reg_end = 0;   //!< the last alpha_reg used

@@ -53,4 +53,9 @@ Eigen::MatrixXd SparseCholesky::solve(const Eigen::MatrixXd& b) const {
   return x;
 }
 
+std::size_t SparseCholesky::factor_nonzeros() const {
+  if (backend_ == CholeskyBackend::Cholmod) return std::size_t(impl_->cholmod.cholmod().lnz);
+  return std::size_t(impl_->ldlt.matrixL().nestedExpression().nonZeros() + impl_->ldlt.rows());
+}
+
 }  // namespace topotrack

@@ -32,6 +32,8 @@ public:
   Eigen::VectorXd solve(const Eigen::VectorXd& b) const;
   //! Several right-hand sides at once (the columns of b).
   Eigen::MatrixXd solve(const Eigen::MatrixXd& b) const;
+  //! Entries of the factor L (diagonal included) of the last factorisation.
+  std::size_t factor_nonzeros() const;
 
 private:
   struct Impl;

@@ -45,6 +45,7 @@ Figures run_pair(const std::string& name, int frame, int gap) {
   env_double("TOPOTRACK_TEST_PCG_TOLERANCE", params.pcg_tolerance);
   env_double("TOPOTRACK_TEST_STEP_TOLERANCE", params.step_tolerance);
   env_double("TOPOTRACK_TEST_FIT_TOLERANCE", params.fit_tolerance);
+  env_double("TOPOTRACK_TEST_STALL_RATIO", params.stall_ratio);
   env_double("TOPOTRACK_TEST_CONVERGENCE_TOLERANCE", params.convergence_tolerance);
   env_double("TOPOTRACK_TEST_ALPHA_REG_START", params.alpha_reg_start);
   env_double("TOPOTRACK_TEST_ALPHA_REG_MIN", params.alpha_reg_min);

@@ -285,6 +285,9 @@ TEST(Alignment, BadParametersThrow) {
   p = CoarseParams{};
   p.fit_tolerance = std::nan("");
   EXPECT_THROW(align_coarse(c.source, c.target, p), InvalidInput);
+  p = CoarseParams{};
+  p.stall_ratio = -0.5;
+  EXPECT_THROW(align_coarse(c.source, c.target, p), InvalidInput);
   SurfaceMesh empty;
   EXPECT_THROW(align_coarse(empty, c.target), InvalidInput);
 }
@@ -293,6 +296,7 @@ TEST(Alignment, CholeskyBackendsAgree) {
   Case c1 = make_case([](const Vec3& p) { return Vec3(rotation(10, Vec3(0, 0, 1)) * p); });
   Case c2 = make_case([](const Vec3& p) { return Vec3(rotation(10, Vec3(0, 0, 1)) * p); });
   CoarseParams p;
+  p.linear_solver = CoarseLinearSolver::Direct;  // the backend serves the direct solve only
   p.solver = CholeskyBackend::EigenLDLT;
   const CoarseReport a = align_coarse(c1.source, c1.target, p);
   p.solver = CholeskyBackend::Cholmod;
