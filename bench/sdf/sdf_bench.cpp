@@ -8,6 +8,7 @@
 
 #include "kernels/gen/synthetic.hpp"
 #include "kernels/sdf/marching_cubes.hpp"
+#include "kernels/sdf/narrow_band.hpp"
 #include "kernels/sdf/signed_distance.hpp"
 
 namespace topotrack {
@@ -81,6 +82,32 @@ void BM_SignedDistanceTracker(benchmark::State& state) {
   run_signed_distance(state, p);
 }
 
+// The two methods side by side at the tracker's configuration: second argument 0 = OpenVDB meshToVolume with
+// the exact-sign pass (the method before narrow_band.hpp), 1 = the hand-written narrow band; third argument
+// the half width in tenths of a voxel.
+void BM_SignedDistanceMethod(benchmark::State& state) {
+  SignedDistanceParams p;
+  p.method = state.range(1) == 0 ? SdfMethod::kOpenVdb : SdfMethod::kNarrowBand;
+  p.half_width_voxels = double(state.range(2)) / 10;
+  p.exact_sign_band_voxels = 0.25;
+  run_signed_distance(state, p);
+}
+
+// The narrow band alone with its phases; second argument the half width in tenths of a voxel.
+void BM_NarrowBand(benchmark::State& state) {
+  const Input in = bumpy_torus(state.range(0));
+  NarrowBandReport r;
+  for (auto _ : state) benchmark::DoNotOptimize(narrow_band_signed_distance(in.positions, in.triangles, {in.edge, double(state.range(1)) / 10}, &r));
+  state.counters["vertices"] = double(in.positions.size());
+  state.counters["active_voxels"] = double(r.active_voxels);
+  state.counters["pairs"] = double(r.triangle_blocks);
+  state.counters["blocks"] = double(r.blocks);
+  state.counters["bin_s"] = r.seconds_bin;
+  state.counters["crossings_s"] = r.seconds_crossings;
+  state.counters["blocks_s"] = r.seconds_blocks;
+  state.counters["tree_s"] = r.seconds_tree;
+}
+
 // Resurfacing's configuration (kernels/gen/resurface.hpp): winding-number sign within 3 voxels and
 // thin parts thickened to 1.75 voxels (ResurfaceParams' defaults).
 void BM_SignedDistanceResurface(benchmark::State& state) {
@@ -129,6 +156,13 @@ BENCHMARK(BM_SignedDistanceTracker)
     ->Args({100000, 15})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
+BENCHMARK(BM_SignedDistanceMethod)
+    ->ArgsProduct({{10000, 100000, 400000}, {0, 1}, {30}})
+    ->ArgsProduct({{100000}, {0, 1}, {20}})
+    ->Unit(benchmark::kMillisecond)
+    ->MeasureProcessCPUTime()
+    ->UseRealTime();
+BENCHMARK(BM_NarrowBand)->ArgsProduct({{100000}, {15, 20, 30}})->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime()->UseRealTime();
 BENCHMARK(BM_SignedDistanceResurface)->Arg(10000)->Arg(100000)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_MarchingCubes)->Arg(10000)->Arg(40000)->Arg(100000)->Arg(400000)->Unit(benchmark::kMillisecond)->UseRealTime();
 

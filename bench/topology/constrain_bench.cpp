@@ -12,7 +12,9 @@
 #include "kernels/mesh/mesh_convert.hpp"
 #include "kernels/mesh/mesh_queries.hpp"
 #include "kernels/sdf/signed_distance.hpp"
+#include "kernels/topology/classify.hpp"
 #include "kernels/topology/constrain.hpp"
+#include "kernels/topology/lattice_cut.hpp"
 
 namespace topotrack {
 namespace {
@@ -41,14 +43,20 @@ const Pair& scene_pair(int resolution) {
   return *p;
 }
 
-void run(benchmark::State& state, bool self) {
+void run(benchmark::State& state, bool self, SdfMethod method = SdfMethod::kAuto) {
   const Pair& p = scene_pair(int(state.range(0)));
   ConstrainReport r;
   for (auto _ : state) {
     state.PauseTiming();
     SurfaceMesh m = p.mesh.clone();
     state.ResumeTiming();
-    const openvdb::FloatGrid::Ptr theta = signed_distance(self ? m : p.next, p.voxel);
+    std::vector<Vec3> P;
+    std::vector<std::array<Index, 3>> T;
+    extract_triangles(self ? m : p.next, P, T);
+    SignedDistanceParams sp;
+    sp.voxel_size = p.voxel;
+    sp.method = method;
+    const openvdb::FloatGrid::Ptr theta = signed_distance(P, T, sp);
     EventList events;
     r = constrain_topology(m, *theta, {}, &events);
     benchmark::DoNotOptimize(m.n_vertices());
@@ -81,14 +89,52 @@ void BM_ConstrainSelfOnly(benchmark::State& state) {
   state.counters["vertices"] = double(p.mesh.n_vertices());
   state.counters["complex_cells"] = double(r.complex_cells);
   state.counters["cut_s"] = r.seconds_cut;
-  state.counters["classify_s"] = r.seconds_classify - r.seconds_cut;
+  state.counters["index_s"] = r.seconds_index;
+  state.counters["classify_s"] = r.seconds_classify - r.seconds_cut - r.seconds_index;
   state.counters["replace_s"] = r.seconds_replace;
+  state.counters["assemble_s"] = r.seconds_assemble;
+  state.counters["rebuild_s"] = r.seconds_rebuild;
+  state.counters["slivers_s"] = r.seconds_slivers;
+  state.counters["assemblies"] = r.assemblies;
+  state.counters["components_s"] = r.seconds_components;
+  state.counters["events_s"] = r.seconds_events;
+  state.counters["total_s"] = r.seconds_total;
 }
+// The steps of ConstrainTopology(M, φ_M) alone: the lattice cut, the cell index, the classification.
+void BM_LatticeCut(benchmark::State& state) {
+  const Pair& p = scene_pair(int(state.range(0)));
+  const openvdb::FloatGrid::Ptr theta = signed_distance(p.mesh, p.voxel);
+  std::size_t pieces = 0;
+  for (auto _ : state) pieces = topology::cut_by_lattice(p.mesh, theta->transform()).pieces.size();
+  state.counters["vertices"] = double(p.mesh.n_vertices());
+  state.counters["pieces"] = double(pieces);
+}
+void BM_ClassifyCells(benchmark::State& state) {
+  const Pair& p = scene_pair(int(state.range(0)));
+  const openvdb::FloatGrid::Ptr theta = signed_distance(p.mesh, p.voxel);
+  const topology::LatticeCut cut = topology::cut_by_lattice(p.mesh, theta->transform());
+  const topology::CellIndex index = topology::index_cells(cut, *theta);
+  std::size_t n = 0;
+  for (auto _ : state) n = topology::complex_cells(p.mesh, cut, index, *theta).size();
+  state.counters["vertices"] = double(p.mesh.n_vertices());
+  state.counters["cells"] = double(index.cells.size());
+  state.counters["complex"] = double(n);
+}
+BENCHMARK(BM_LatticeCut)->Arg(100)->Arg(200)->Arg(300)->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime()->UseRealTime();
+BENCHMARK(BM_ClassifyCells)->Arg(100)->Arg(200)->Arg(300)->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime()->UseRealTime();
+
 BENCHMARK(BM_SignedDistanceOnly)->Arg(100)->Arg(200)->Arg(300)->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime()->UseRealTime();
 BENCHMARK(BM_ConstrainSelfOnly)->Arg(100)->Arg(200)->Arg(300)->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime()->UseRealTime();
 
 void BM_ConstrainToNextFrame(benchmark::State& state) { run(state, false); }
 void BM_ConstrainSelf(benchmark::State& state) { run(state, true); }
+
+// Θ = φ_M with either signed distance (second argument 0: OpenVDB meshToVolume, 1: the narrow band): the
+// before / after of narrow_band.hpp in one run.
+void BM_ConstrainSelfMethod(benchmark::State& state) {
+  run(state, true, state.range(1) == 0 ? SdfMethod::kOpenVdb : SdfMethod::kNarrowBand);
+}
+BENCHMARK(BM_ConstrainSelfMethod)->ArgsProduct({{300}, {0, 1}})->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime()->UseRealTime();
 
 BENCHMARK(BM_ConstrainToNextFrame)->Arg(100)->Arg(200)->Arg(300)->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime()->UseRealTime();
 BENCHMARK(BM_ConstrainSelf)->Arg(100)->Arg(200)->Arg(300)->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime()->UseRealTime();

@@ -1,6 +1,7 @@
 #include "kernels/sdf/signed_distance.hpp"
 
 #include "kernels/sdf/exact_sign.hpp"
+#include "kernels/sdf/narrow_band.hpp"
 #include "kernels/sdf/thicken.hpp"
 
 #include <chrono>
@@ -72,6 +73,24 @@ openvdb::FloatGrid::Ptr signed_distance(std::span<const Vec3> positions,
         TT_THROW(InvalidInput, "signed distance: triangle " << f << " has vertex index " << v << " out of range ("
                                                             << positions.size() << " vertices)");
   SignedDistanceReport rep;
+  rep.method = params.method;
+  if (rep.method == SdfMethod::kAuto)
+    rep.method = params.sign_method == SignMethod::kPseudonormal && params.min_thickness_voxels == 0 &&
+                         narrow_band_fits(positions, triangles, voxel_size, half_width_voxels)
+                     ? SdfMethod::kNarrowBand
+                     : SdfMethod::kOpenVdb;
+  if (rep.method == SdfMethod::kNarrowBand) {
+    if (params.min_thickness_voxels > 0)
+      TT_THROW(InvalidInput, "signed distance: the narrow-band method does not thicken thin parts");
+    const auto t0 = Clock::now();
+    NarrowBandReport nb;
+    openvdb::FloatGrid::Ptr grid =
+        narrow_band_signed_distance(positions, triangles, {voxel_size, half_width_voxels}, &nb);
+    rep.seconds_volume = std::chrono::duration<double>(Clock::now() - t0).count();
+    rep.active_voxels = nb.active_voxels;
+    if (report) *report = rep;
+    return grid;
+  }
   const float hw = static_cast<float>(half_width_voxels);
   openvdb::FloatGrid::Ptr grid;
   if (triangles.empty()) {

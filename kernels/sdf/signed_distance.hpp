@@ -24,6 +24,15 @@ void ensure_openvdb_initialized();
 //! \throw InvalidInput when voxel_size is not finite and positive.
 openvdb::math::Transform::Ptr voxel_transform(double voxel_size);
 
+//! How the distance is computed; kAuto is the one place that picks.
+enum class SdfMethod {
+  //! kNarrowBand for the tracker's closed meshes (sign_method kPseudonormal, no thickening, extent within
+  //! narrow_band_fits), OpenVDB otherwise.
+  kAuto,
+  kNarrowBand,  //!< narrow_band.hpp: exact distances, winding sign along lattice columns (closed meshes)
+  kOpenVdb,     //!< OpenVDB meshToVolume and the passes below: any soup (self-intersecting, open, thin parts)
+};
+
 struct SignedDistanceParams {
   double voxel_size = 0;            //!< required: finite, > 0
   double half_width_voxels = 3.0;   //!< active band on each side of the surface, >= 1
@@ -34,6 +43,7 @@ struct SignedDistanceParams {
   //! > 0: parts thinner than that many voxels are thickened to it (thicken.hpp) so that the zero set keeps
   //! them in one piece; needs half_width_voxels >= min_thickness_voxels / 2 + 1.5.
   double min_thickness_voxels = 0.0;
+  SdfMethod method = SdfMethod::kAuto;
 };
 
 struct SignedDistanceReport {
@@ -41,11 +51,13 @@ struct SignedDistanceReport {
   std::size_t signs_flipped = 0;     //!< voxels whose OpenVDB sign the exact-sign pass changed
   std::size_t thin_vertices = 0;     //!< vertices on parts thinner than min_thickness_voxels
   std::size_t thickened_voxels = 0;  //!< voxels the thickening lowered
+  SdfMethod method = SdfMethod::kAuto;  //!< the method used (kNarrowBand or kOpenVdb)
   double seconds_volume = 0, seconds_sign = 0, seconds_thicken = 0;
 };
 
 //! Signed distance to the triangle mesh (positions, triangles) in a narrow band (§4.3), with the passes
-//! `params` asks for. \pre the mesh is closed and outward oriented (for an open mesh the sign is what
+//! `params` asks for. With kNarrowBand (what kAuto picks for the tracker) every sign is exact and
+//! exact_sign_band_voxels has nothing left to do; seconds_volume is the whole computation. \pre the mesh is closed and outward oriented (for an open mesh the sign is what
 //! the sign method makes of it). \throw InvalidInput on a bad parameter (see SignedDistanceParams), a
 //! non-finite coordinate or a triangle index out of range. An empty mesh gives an empty grid.
 openvdb::FloatGrid::Ptr signed_distance(std::span<const Vec3> positions,

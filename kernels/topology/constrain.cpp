@@ -107,16 +107,28 @@ ConstrainReport constrain_topology(SurfaceMesh& mesh, const openvdb::FloatGrid& 
   LatticeCut cut = cut_by_lattice(mesh, xform);
   report.seconds_cut = since(t0);
   const CellIndex index = index_cells(cut, theta);
+  report.seconds_index = since(t0) - report.seconds_cut;
   std::vector<std::uint64_t> region = complex_cells(mesh, cut, index, theta);
   report.bad_faces = cut.bad_faces.size();
   report.seconds_classify = since(t0);
   if (region.empty()) {
+    const auto tc = Clock::now();
     report.components_before = report.components_after = int(connected_components(mesh));
+    report.seconds_components = since(tc);
     report.seconds_total = since(t0);
     return report;
   }
-  report.components_before = int(connected_components(mesh));
-  absorb_sliver_pieces(mesh, cut, region);
+  {
+    const auto tc = Clock::now();
+    report.components_before = int(connected_components(mesh));
+    report.seconds_components = since(tc);
+  }
+  auto timed = [](double& acc, auto&& f) {
+    const auto ts = Clock::now();
+    f();
+    acc += since(ts);
+  };
+  timed(report.seconds_slivers, [&] { absorb_sliver_pieces(mesh, cut, region); });
 
   // Replacement, growing the region when a check fails (§4.3: "if a local repair fails, grow"), then
   // taking in the cells of any sliver (at most kSliverRounds times; a valid result is never given up).
@@ -128,7 +140,10 @@ ConstrainReport constrain_topology(SurfaceMesh& mesh, const openvdb::FloatGrid& 
   bool have_valid = false;
   std::string why;
   for (int attempt = 0, sliver_round = 0;;) {
-    bool ok = assemble(mesh, cut, index, region, theta, A, why);
+    bool ok = false;
+    timed(report.seconds_assemble, [&] { ok = assemble(mesh, cut, index, region, theta, A, why); });
+    ++report.assemblies;
+    const auto tr = Clock::now();
     if (ok) {
       std::vector<VertexId> ids(A.positions.size());
       for (std::size_t i = 0; i < A.n_kept(); ++i) ids[i] = mesh.id(Vertex(A.kept_old[i]));
@@ -142,16 +157,19 @@ ConstrainReport constrain_topology(SurfaceMesh& mesh, const openvdb::FloatGrid& 
         why = e.what();
       }
     }
+    report.seconds_rebuild += since(tr);
     if (ok) {
       if (sliver_round < kSliverRounds) {
         std::vector<std::uint64_t> grown = region;
-        if (absorb_sliver_triangles(cut, A, xform, grown) > 0) {
+        std::size_t absorbed = 0;
+        timed(report.seconds_slivers, [&] { absorbed = absorb_sliver_triangles(cut, A, xform, grown); });
+        if (absorbed > 0) {
           valid_A = std::move(A);
           valid_result = std::move(result);
           valid_region = region;
           have_valid = true;
           region = std::move(grown);
-          absorb_sliver_pieces(mesh, cut, region);
+          timed(report.seconds_slivers, [&] { absorb_sliver_pieces(mesh, cut, region); });
           ++sliver_round;
           continue;
         }
@@ -167,8 +185,10 @@ ConstrainReport constrain_topology(SurfaceMesh& mesh, const openvdb::FloatGrid& 
     if (attempt >= params.max_region_growth)
       TT_THROW(TopologyError, "constrain topology: replacement failed after growing the complex region "
                                   << attempt << " times: " << why);
-    region = grow_region(region);
-    absorb_sliver_pieces(mesh, cut, region);
+    timed(report.seconds_slivers, [&] {
+      region = grow_region(region);
+      absorb_sliver_pieces(mesh, cut, region);
+    });
     ++attempt;
     ++report.region_growth;
   }
@@ -218,7 +238,11 @@ ConstrainReport constrain_topology(SurfaceMesh& mesh, const openvdb::FloatGrid& 
   report.patches_created = W.created.size();
   report.patches_deleted = W.deleted.size();
   mesh = std::move(result);
-  report.components_after = int(connected_components(mesh));
+  {
+    const auto tc = Clock::now();
+    report.components_after = int(connected_components(mesh));
+    report.seconds_components += since(tc);
+  }
   report.seconds_total = since(t0);
   return report;
 }

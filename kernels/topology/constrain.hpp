@@ -65,8 +65,14 @@ struct ConstrainReport {
   int region_growth = 0;             //!< layers the region grew by
   int components_before = 0, components_after = 0;
   double seconds_cut = 0;       //!< cutting M by the lattice
+  double seconds_index = 0;     //!< grouping the pieces by cell, Θ's sign-change cells (within seconds_classify)
   double seconds_classify = 0;  //!< cutting and classification
-  double seconds_replace = 0;   //!< removal, marching-cubes patch, stitching, rebuild
+  double seconds_replace = 0;   //!< removal, marching-cubes patch, stitching, rebuild, sliver rounds:
+  double seconds_assemble = 0;  //!<   assemble() over all attempts and sliver rounds
+  double seconds_rebuild = 0;   //!<   SurfaceMesh::from_triangles + validate over all attempts
+  double seconds_slivers = 0;   //!<   absorb_sliver_pieces / absorb_sliver_triangles / grow_region
+  int assemblies = 0;           //!<   replacements built (first, growths, sliver rounds)
+  double seconds_components = 0;  //!< connected components before and after
   double seconds_events = 0;    //!< event and property propagation
   double seconds_total = 0;
 };

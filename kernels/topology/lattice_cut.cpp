@@ -313,34 +313,50 @@ LatticeCut cut_by_lattice(const SurfaceMesh& mesh, const openvdb::math::Transfor
     for (std::size_t c = r.begin(); c != r.end(); ++c) {
       Chunk& out = chunks[c];
       const std::size_t end = std::min(nf, (c + 1) * kChunk);
-      out.pieces.reserve(3 * (end - c * kChunk));
-      out.keys.reserve(12 * (end - c * kChunk));
-      out.tags.reserve(12 * (end - c * kChunk));
+      // About 4 pieces of 4-5 corners per face when the voxel is the edge length (measured on metaballs).
+      out.pieces.reserve(5 * (end - c * kChunk));
+      out.keys.reserve(20 * (end - c * kChunk));
+      out.tags.reserve(20 * (end - c * kChunk));
       for (std::size_t f = c * kChunk; f < end; ++f) {
         if (mesh.is_deleted(Face(Index(f)))) out.face_count.push_back(0);
         else clip_face(mesh, cut.P, Index(f), out);
       }
     }
   });
-  std::size_t n_pieces = 0, n_keys = 0;
-  for (const Chunk& c : chunks) n_pieces += c.pieces.size(), n_keys += c.keys.size();
-  cut.pieces.reserve(n_pieces);
-  cut.keys.reserve(n_keys);
-  cut.tags.reserve(n_keys);
-  cut.face_pieces.reserve(nf + 1);
-  cut.face_pieces.push_back(0);
-  for (Chunk& c : chunks) {
-    const auto key_offset = std::uint32_t(cut.keys.size());
-    for (Piece p : c.pieces) {
-      p.begin += key_offset;
-      cut.pieces.push_back(p);
+  // Concatenate the chunks in order, in parallel (each chunk copies into its own range).
+  std::vector<std::size_t> piece_at(n_chunks + 1, 0), key_at(n_chunks + 1, 0), face_at(n_chunks + 1, 0);
+  for (std::size_t c = 0; c < n_chunks; ++c) {
+    piece_at[c + 1] = piece_at[c] + chunks[c].pieces.size();
+    key_at[c + 1] = key_at[c] + chunks[c].keys.size();
+    face_at[c + 1] = face_at[c] + chunks[c].face_count.size();
+  }
+  cut.pieces.resize(piece_at[n_chunks]);
+  cut.keys.resize(key_at[n_chunks]);
+  cut.tags.resize(key_at[n_chunks]);
+  cut.face_pieces.assign(face_at[n_chunks] + 1, 0);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n_chunks), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t c = r.begin(); c != r.end(); ++c) {
+      Chunk& ch = chunks[c];
+      const auto key_offset = std::uint32_t(key_at[c]);
+      Piece* out = cut.pieces.data() + piece_at[c];
+      for (std::size_t i = 0; i < ch.pieces.size(); ++i) {
+        out[i] = ch.pieces[i];
+        out[i].begin += key_offset;
+      }
+      std::copy(ch.keys.begin(), ch.keys.end(), cut.keys.begin() + std::ptrdiff_t(key_at[c]));
+      std::copy(ch.tags.begin(), ch.tags.end(), cut.tags.begin() + std::ptrdiff_t(key_at[c]));
+      // Piece offsets of the chunk's faces, relative to the chunk's first piece.
+      std::uint32_t* fp = cut.face_pieces.data() + face_at[c] + 1;
+      std::uint32_t acc = std::uint32_t(piece_at[c]);
+      for (std::size_t i = 0; i < ch.face_count.size(); ++i) fp[i] = acc += ch.face_count[i];
+      std::vector<Piece>().swap(ch.pieces);  // free as we go
+      std::vector<PointKey>().swap(ch.keys);
+      std::vector<std::uint8_t>().swap(ch.tags);
     }
-    cut.keys.insert(cut.keys.end(), c.keys.begin(), c.keys.end());
-    cut.tags.insert(cut.tags.end(), c.tags.begin(), c.tags.end());
-    for (std::uint32_t n : c.face_count) cut.face_pieces.push_back(cut.face_pieces.back() + n);
+  });
+  for (Chunk& c : chunks) {
     cut.bad_faces.insert(cut.bad_faces.end(), c.bad_faces.begin(), c.bad_faces.end());
     cut.bad_boxes.insert(cut.bad_boxes.end(), c.bad_boxes.begin(), c.bad_boxes.end());
-    c = Chunk();  // free as we go
   }
   return cut;
 }
