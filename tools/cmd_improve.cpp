@@ -65,6 +65,7 @@ void run_improve(const ImproveOptions& opt) {
 
 void add_improve_command(CLI::App& app) {
   auto opt = std::make_shared<ImproveOptions>();
+  opt->params.measure_quality = true;  // the summary and the JSON report print it
   CLI::App* sub = app.add_subcommand("improve", "ImproveMesh (§4.1): split long edges, collapse short edges and "
                                                 "edges of bad triangles or folds, flip where flat");
   sub->add_option("IN", opt->input, "closed mesh (OBJ or PLY)")->required();

@@ -66,6 +66,13 @@ struct Survey {
   bool empty() const { return long_edges.empty() && short_edges.empty() && bad_faces.empty() && folds.empty(); }
 };
 
+// Operations are applied serially in a fixed order; only the surveys run in parallel. Parallel collapses on
+// independent sets of edges were measured not to pay: on a 100k-vertex resurfaced elephant frame (gen
+// resurface --resolution 230, 24k collapses) the collapse pass is ~38% of improve_mesh's time (scan 16%,
+// splits 13%, compaction and quality 33%), 0.07-0.14 s CPU per 100k vertices in all (bench/improve), so two
+// cores could save at most ~0.03 s on a first improvement; in the tracker's steady state (an improved mesh
+// moved by the alignment) there are almost no collapses and the call is the parallel scan (samba, 13k
+// vertices: 0.8 ms), against 1.15 s per tracker frame.
 class Improver {
 public:
   Improver(SurfaceMesh& mesh, const ImproveParams& params, EventList* events, ImproveReport& report)
@@ -97,7 +104,7 @@ public:
       else
         survey_touched(s);
       rep_.seconds_scan += since(t0);
-      if (s.empty() && unfixed_.empty()) break;
+      if (s.empty() && unfixed_.empty() && unfixed_short_.empty()) break;
       if (dev_.empty()) dev_.assign(m_.vertices_size(), 0.0);
       rep_.iterations = it + 1;
       std::size_t ops = 0;
@@ -381,8 +388,9 @@ private:
 
   //! Collapse e into its midpoint (§4.1, §4.4) if that keeps a closed 2-manifold without fold-over,
   //! zero-area triangle, new fold, edge longer than L_max or excess surface movement, and if the
-  //! triangles get better as `mode` demands.
-  bool try_collapse(Edge e, CollapseMode mode) {
+  //! triangles get better as `mode` demands. With `dry_run` only report whether it could go and, in
+  //! *dry_run, how far it would move the surface.
+  bool try_collapse(Edge e, CollapseMode mode, double* dry_run = nullptr) {
     const Halfedge h = m_.halfedge(e, 0);
     if (!collapse_topology_ok(h)) return false;
     const Vertex a = m_.from_vertex(h), b = m_.to_vertex(h);
@@ -481,7 +489,16 @@ private:
       if (new_worst < old_worst || new_folds > old_folds) return false;
     }
     const double dev_new = std::max(dev_[a.idx], dev_[b.idx]) + dev_local;
-    if (mode != CollapseMode::Fold && (dev_local > operation_bound(old_q) || dev_new > max_dev_)) return false;
+    // A short edge's collapse moves its end points by less than L_min / 2 (and dev_local is at most that):
+    // the per-operation bound would only leave edges below L_min (measured: 15-35 per resurfaced frame at
+    // 0.2 L), so it is bounded by the accumulated deviation alone. Fold collapses are exempt (fold_pass
+    // picks the gentlest).
+    if (mode == CollapseMode::Improve && dev_local > operation_bound(old_q)) return false;
+    if (mode != CollapseMode::Fold && dev_new > max_dev_) return false;
+    if (dry_run) {
+      *dry_run = dev_local;
+      return true;
+    }
     const VertexId k = m_.take_fresh_id();
     if (events_) events_->record_collapse(m_.id(a), m_.id(b), k);
     m_.collapse(h, p);
@@ -530,7 +547,10 @@ private:
     for (const auto& [key, ei] : c) {
       const Edge e(ei);
       if (m_.is_deleted(e) || length2(e) >= lmin2_) continue;
-      n += collapse_or_unblock(e, CollapseMode::Short);
+      const Vertex a = m_.vertex(e, 0), b = m_.vertex(e, 1);
+      const std::size_t done = collapse_or_unblock(e, CollapseMode::Short);
+      if (!done) unfixed_short_.emplace_back(a.idx, b.idx);
+      n += done;
     }
     return n;
   }
@@ -584,17 +604,14 @@ private:
     bool degenerate;  // before the move: its normal is noise
   };
 
-  //! Move v towards the centroid of its one-ring within its tangent plane (full step, else a half or a
-  //! quarter) if that raises the smallest angle of its triangles, inverts none, adds no fold, keeps its
-  //! edges within L_max and the surface within the movement bound. The last resort for a bad triangle that
-  //! no flip or collapse can fix (a needle whose short edge would pinch a thin tube, a cap between creases).
-  //! The vertex keeps its id: it stands for the same surface point, moved a little along the surface as the
-  //! alignment moves every vertex; event lists record re-sampling only (§4.4), so no event is recorded.
-  bool try_relax(Vertex v) {
+  //! The triangles around v (star_) before a move, the sum of their area vectors (false when it vanishes),
+  //! the centroid of its one-ring and the smallest triangle quality.
+  bool gather_star(Vertex v, Vec3& centroid, Vec3& normal, double& old_q) {
     star_.clear();
     const Vec3& p0 = pos(v);
-    Vec3 centroid = Vec3::Zero(), normal = Vec3::Zero();
-    double old_q = 1;
+    centroid = Vec3::Zero();
+    normal = Vec3::Zero();
+    old_q = 1;
     const Halfedge g0 = m_.halfedge(v);
     Halfedge g = g0;
     do {
@@ -611,58 +628,148 @@ private:
       star_.push_back(s);
       g = m_.ccw_rotated(g);
     } while (g != g0);
-    if (!(normal.squaredNorm() > 0)) return false;
+    centroid /= double(star_.size());
+    return normal.squaredNorm() > 0;
+  }
+
+  //! Whether moving the centre of star_ to q inverts no triangle, makes none degenerate, keeps its edges
+  //! within L_max and adds no fold nor sharpens a crease beyond min_dihedral; *new_q: the smallest
+  //! quality of the moved triangles.
+  bool star_move_ok(const Vec3& q, double* new_q, int* folds_removed = nullptr) {
+    *new_q = 1;
+    for (StarFace& s : star_) {
+      const Vec3 &q1 = pos(s.w1), &q2 = pos(s.w2);
+      s.n_new = (q1 - q).cross(q2 - q);
+      if ((q1 - q).squaredNorm() > lmax2_ || !(s.n_new.squaredNorm() > 0) || (!s.degenerate && s.n_old.dot(s.n_new) <= 0))
+        return false;
+      *new_q = std::min(*new_q, triangle_quality(q, q1, q2));
+    }
+    if (!(*new_q > kDegenerateQuality)) return false;
+    double old_worst = 1, new_worst = 1;
+    int old_folds = 0, new_folds = 0;
+    // A degenerate triangle had no normal: the crease it shows once it has one is no new fold (the fold
+    // pass judges it next round).
+    for (std::size_t i = 0; i < star_.size(); ++i) {
+      const StarFace &s = star_[i], &next = star_[(i + 1) % star_.size()];
+      if (s.degenerate) continue;
+      for (const auto& [n, m, skip] : {std::tuple{s.n_old, next.n_old, next.degenerate}, std::tuple{s.n_old, s.n_out, false}}) {
+        if (skip) continue;
+        const double c = normal_cos(n, m);
+        old_worst = std::min(old_worst, c);
+        old_folds += c < cos_fold_;
+      }
+      for (const auto& [n, m, skip] : {std::tuple{s.n_new, next.n_new, next.degenerate}, std::tuple{s.n_new, s.n_out, false}}) {
+        if (skip) continue;
+        const double c = normal_cos(n, m);
+        new_worst = std::min(new_worst, c);
+        new_folds += c < cos_fold_;
+      }
+    }
+    if (folds_removed) *folds_removed = old_folds - new_folds;
+    return !(new_worst < cos_fold_ && (new_worst < old_worst || new_folds > old_folds));
+  }
+
+  void move_vertex(Vertex v, const Vec3& q, double dev_new) {
+    m_.position(v) = q;
+    dev_[v.idx] = dev_new;
+    for (const StarFace& s : star_) dev_[s.w1.idx] = std::max(dev_[s.w1.idx], dev_new);
+    touch_ring(v);
+    ++rep_.relaxations;
+    after_operation();
+  }
+
+  //! Move v towards the centroid of its one-ring within its tangent plane (full step, else a half or a
+  //! quarter) if that raises the smallest angle of its triangles, inverts none, adds no fold, keeps its
+  //! edges within L_max and the surface within the movement bound. The last resort for a bad triangle that
+  //! no flip or collapse can fix (a needle whose short edge would pinch a thin tube, a cap between creases).
+  //! The vertex keeps its id: it stands for the same surface point, moved a little along the surface as the
+  //! alignment moves every vertex; event lists record re-sampling only (§4.4), so no event is recorded.
+  bool try_relax(Vertex v) {
+    Vec3 centroid, normal;
+    double old_q = 1;
+    if (!gather_star(v, centroid, normal, old_q)) return false;
+    const Vec3& p0 = pos(v);
     const Vec3 nv = normal.normalized();
-    Vec3 d = centroid / double(star_.size()) - p0;
+    Vec3 d = centroid - p0;
     d -= d.dot(nv) * nv;
     for (const double t : {1.0, 0.5, 0.25}) {
       const Vec3 q = p0 + t * d;
       double new_q = 1;
-      bool ok = true;
-      for (StarFace& s : star_) {
-        const Vec3 &q1 = pos(s.w1), &q2 = pos(s.w2);
-        s.n_new = (q1 - q).cross(q2 - q);
-        if ((q1 - q).squaredNorm() > lmax2_ || !(s.n_new.squaredNorm() > 0) || (!s.degenerate && s.n_old.dot(s.n_new) <= 0)) {
-          ok = false;
-          break;
-        }
-        new_q = std::min(new_q, triangle_quality(q, q1, q2));
-      }
       // The whole step counts against the movement bound: across a crease or off the end of a sliver the
       // tangent plane is not the surface, so distances to the face planes would underestimate the move.
       const double dev_local = t * d.norm(), dev_new = dev_[v.idx] + dev_local;
       // Around a triangle below 2° any gain counts; above, only a clear one (no creeping on).
       const double gain_floor = old_q < q_very_bad_ ? old_q : kRelaxGainFactor * old_q + kRelaxGainMin;
-      if (!ok || !(new_q > gain_floor) || !(new_q > kDegenerateQuality) ||
-          dev_local > operation_bound(old_q) || dev_new > max_dev_)
+      if (dev_local > operation_bound(old_q) || dev_new > max_dev_ || !star_move_ok(q, &new_q) ||
+          !(new_q > gain_floor))
         continue;
-      double old_worst = 1, new_worst = 1;
-      int old_folds = 0, new_folds = 0;
-      // A degenerate triangle had no normal: the crease it shows once it has one is no new fold (the fold
-      // pass judges it next round).
-      for (std::size_t i = 0; i < star_.size(); ++i) {
-        const StarFace &s = star_[i], &next = star_[(i + 1) % star_.size()];
-        if (s.degenerate) continue;
-        for (const auto& [n, m, skip] : {std::tuple{s.n_old, next.n_old, next.degenerate}, std::tuple{s.n_old, s.n_out, false}}) {
-          if (skip) continue;
-          const double c = normal_cos(n, m);
-          old_worst = std::min(old_worst, c);
-          old_folds += c < cos_fold_;
-        }
-        for (const auto& [n, m, skip] : {std::tuple{s.n_new, next.n_new, next.degenerate}, std::tuple{s.n_new, s.n_out, false}}) {
-          if (skip) continue;
-          const double c = normal_cos(n, m);
-          new_worst = std::min(new_worst, c);
-          new_folds += c < cos_fold_;
-        }
-      }
-      if (new_worst < cos_fold_ && (new_worst < old_worst || new_folds > old_folds)) continue;
-      m_.position(v) = q;
-      dev_[v.idx] = dev_new;
-      for (const StarFace& s : star_) dev_[s.w1.idx] = std::max(dev_[s.w1.idx], dev_new);
-      touch_ring(v);
-      ++rep_.relaxations;
-      after_operation();
+      move_vertex(v, q, dev_new);
+      return true;
+    }
+    return false;
+  }
+
+  //! Remove a fold across an edge of v's star by moving v towards the centroid of its one-ring (the whole
+  //! Laplacian step, a half or a quarter: across a fold the tangent plane means nothing), if that removes
+  //! a fold, adds none, gives no triangle a new angle below min_angle and moves v at most
+  //! max_operation_deviation. Where a crease is barely a fold this rounds it off with a small move; a fold
+  //! collapse (fold_pass) moved the surface of a resurfaced pcow frame by 0.5 L.
+  bool try_unfold(Vertex v) {
+    Vec3 centroid, normal;
+    double old_q = 1;
+    if (!gather_star(v, centroid, normal, old_q)) return false;
+    const Vec3 p0 = pos(v), d = centroid - p0;
+    const double q_keep = std::min(old_q, q_min_);
+    for (const double t : {0.25, 0.5, 1.0}) {
+      const Vec3 q = p0 + t * d;
+      const double dev_local = t * d.norm(), dev_new = dev_[v.idx] + dev_local;
+      double new_q = 1;
+      int removed = 0;
+      if (dev_local > op_dev_ || dev_new > max_dev_ || !star_move_ok(q, &new_q, &removed) || removed <= 0 ||
+          new_q < q_keep)
+        continue;
+      move_vertex(v, q, dev_new);
+      return true;
+    }
+    return false;
+  }
+
+  //! The last resort for an edge below L_min that no collapse can remove (its collapse would pinch a
+  //! handle or a sheet thinner than L_min, or sharpen a crease into a fold): slide v within its tangent
+  //! plane, towards the centroid of its one-ring or straight away from `other`, so that the edge reaches
+  //! L_min, v has fewer short edges than before, no triangle of its star gets a new angle below
+  //! min_angle (or worse than before) and no fold appears. The move is at most L_min / 2, as a collapse of
+  //! the edge would move v. All or nothing, so a second call refuses what the first refused (fixed point).
+  //! With it and the short collapses' bound (try_collapse), edges below L_min on frames 1-3 of `gen
+  //! resurface` (128 voxels) went from 38/32/27 (elephant), 18/19/18 (samba), 25/31/26 (pcow) to 4/4/0,
+  //! 0/0/0, 0/9/2, most of the rest on handles thinner than L_min (tests/kernels/improve/improve_data_test).
+  bool try_lengthen(Vertex v, Vertex other) {
+    Vec3 centroid, normal;
+    double old_q = 1;
+    if (!gather_star(v, centroid, normal, old_q)) return false;
+    const Vec3 p0 = pos(v), po = pos(other);
+    std::size_t old_short = 0;
+    for (const StarFace& s : star_) old_short += (pos(s.w1) - p0).squaredNorm() < lmin2_;
+    const Vec3 nv = normal.normalized();
+    Vec3 to_c = centroid - p0, away = p0 - po;
+    to_c -= to_c.dot(nv) * nv;
+    away -= away.dot(nv) * nv;
+    std::array<Vec3, 3> moves{p0 + to_c, p0 + 0.5 * to_c, p0};
+    if (away.squaredNorm() > 0) {
+      // The step along `away` that makes |v - other| = 1.01 L_min.
+      const Vec3 u = away.normalized(), r = p0 - po;
+      const double target = 1.01 * lmin_, b = r.dot(u), disc = b * b - r.squaredNorm() + target * target;
+      if (disc >= 0) moves[2] = p0 + (std::sqrt(disc) - b) * u;
+    }
+    const double q_keep = std::min(old_q, q_min_);
+    for (const Vec3& q : moves) {
+      const double dev_local = (q - p0).norm(), dev_new = dev_[v.idx] + dev_local;
+      if (!(dev_local > 0) || dev_local > 0.5 * lmin_ || dev_new > max_dev_ || (q - po).squaredNorm() < lmin2_) continue;
+      std::size_t new_short = 0;
+      for (const StarFace& s : star_) new_short += (pos(s.w1) - q).squaredNorm() < lmin2_;
+      double new_q = 1;
+      if (new_short >= old_short || !star_move_ok(q, &new_q) || new_q < q_keep) continue;
+      move_vertex(v, q, dev_new);
       return true;
     }
     return false;
@@ -689,11 +796,19 @@ private:
   //! Relax a corner of each triangle that the last round could not fix and that is still bad: the corner
   //! opposite its longest edge (the largest angle) first, then the ends of that edge.
   std::size_t relax_pass() {
+    std::size_t n = 0;
+    std::vector<std::pair<Index, Index>> shorts;
+    shorts.swap(unfixed_short_);
+    for (const auto& [ai, bi] : shorts) {
+      const Vertex a(ai), b(bi);
+      if (m_.is_deleted(a) || m_.is_deleted(b) || !m_.find_halfedge(a, b).is_valid()) continue;
+      if ((pos(a) - pos(b)).squaredNorm() >= lmin2_) continue;
+      n += try_lengthen(a, b) || try_lengthen(b, a);
+    }
     std::sort(unfixed_.begin(), unfixed_.end());
     unfixed_.erase(std::unique(unfixed_.begin(), unfixed_.end()), unfixed_.end());
     std::vector<Index> faces;
     faces.swap(unfixed_);
-    std::size_t n = 0;
     for (const Index fi : faces) {
       const Face f(fi);
       if (!is_bad(f)) continue;
@@ -720,7 +835,10 @@ private:
   }
 
   // Folds ----------------------------------------------------------------------------------------
-  //! Collapse the folded edge, or else another edge of its two faces (§4.1).
+  //! Collapse the folded edge or another edge of its two faces (§4.1): of those that can go, the one that
+  //! moves the surface least (fold collapses are exempt from the deviation bounds; on a resurfaced pcow
+  //! frame the first that could go moved it by 0.51 L, 0.0029 of the diagonal). Where none can, unblock a
+  //! valence-3 corner first.
   std::size_t fold_pass(const Candidates& c) {
     std::size_t n = 0;
     for (const auto& [key, ei] : c) {
@@ -732,6 +850,29 @@ private:
       for (const Halfedge h : {m_.halfedge(e, 0), m_.halfedge(e, 1)}) {
         edges[k++] = SurfaceMesh::edge(m_.next(h));
         edges[k++] = SurfaceMesh::edge(m_.prev(h));
+      }
+      if (p_.enable_relaxation) {
+        const Halfedge h0 = m_.halfedge(e, 0), h1 = m_.halfedge(e, 1);
+        bool unfolded = false;
+        for (const Vertex v : {m_.to_vertex(m_.next(h0)), m_.to_vertex(m_.next(h1)), m_.to_vertex(h0), m_.to_vertex(h1)})
+          if ((unfolded = try_unfold(v))) break;
+        if (unfolded) {
+          ++n;
+          continue;
+        }
+      }
+      int best = -1;
+      double best_dev = std::numeric_limits<double>::infinity();
+      for (int i = 0; i < 5; ++i) {
+        double dev = 0;
+        if (try_collapse(edges[i], CollapseMode::Fold, &dev) && dev < best_dev) {
+          best = i;
+          best_dev = dev;
+        }
+      }
+      if (best >= 0 && try_collapse(edges[best], CollapseMode::Fold)) {
+        ++n;
+        continue;
       }
       for (const Edge x : edges)
         if (collapse_or_unblock(x, CollapseMode::Fold)) {
@@ -756,6 +897,7 @@ private:
   std::vector<StarFace> star_;
   std::vector<Index> touched_, local_edges_, local_faces_;
   std::vector<Index> unfixed_;  // bad triangles that no flip or collapse fixed since the last relax_pass
+  std::vector<std::pair<Index, Index>> unfixed_short_;  // short edges (end points) no collapse removed
   std::vector<std::uint8_t> vtouched_;
   std::vector<std::uint32_t> estamp_, fstamp_;
   std::uint32_t stamp_ = 0;

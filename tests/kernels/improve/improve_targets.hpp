@@ -12,14 +12,14 @@
 namespace topotrack::test {
 
 inline std::string describe(const std::string& name, const SurfaceMesh& in, const SurfaceMesh& out, const ImproveReport& r) {
-  const QualityStats q0 = quality_stats(in);
+  const QualityStats q0 = quality_stats(in), q = quality_stats(out);
   char buf[400];
   std::snprintf(buf, sizeof buf,
                 "%-22s V %6zu -> %6zu  splits %5zu collapses %5zu flips %5zu it %2d  min angle %5.2f -> %5.2f  "
                 "<10: %.4f -> %.4f  dihedral %6.2f -> %6.2f  edges [%.4f %.4f] in [%.4f %.4f]",
                 name.c_str(), in.n_vertices(), out.n_vertices(), r.splits, r.collapses, r.flips, r.iterations,
-                q0.min_angle_deg, r.quality.min_angle_deg, q0.share_below_10deg, r.quality.share_below_10deg,
-                q0.min_dihedral_deg, r.quality.min_dihedral_deg, r.quality.edge_length.min, r.quality.edge_length.max,
+                q0.min_angle_deg, q.min_angle_deg, q0.share_below_10deg, q.share_below_10deg,
+                q0.min_dihedral_deg, q.min_dihedral_deg, q.edge_length.min, q.edge_length.max,
                 r.min_edge_length, r.max_edge_length);
   return buf;
 }
