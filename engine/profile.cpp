@@ -56,6 +56,7 @@ std::vector<Binding> bindings(TrackerParams& p) {
       {"coarse.max_iterations_per_level", &p.coarse_params.max_iterations_per_level, 1, 1e6},
       {"coarse.convergence_tolerance", &p.coarse_params.convergence_tolerance, 0, 1},
       {"coarse.step_tolerance", &p.coarse_params.step_tolerance, 0, inf},
+      {"coarse.stall_ratio", &p.coarse_params.stall_ratio, 0, 1},
       {"coarse.fit_tolerance", &p.coarse_params.fit_tolerance, 0, inf},
       {"coarse.pcg_tolerance", &p.coarse_params.pcg_tolerance, 0, 1},
       {"coarse.max_pcg_iterations", &p.coarse_params.max_pcg_iterations, 1, 1e6},
