@@ -1,4 +1,4 @@
-// topotrack gen KIND -o DIR: synthetic input sequences with ground truth (blobs, morph, metaballs) or a
+// topotrack gen KIND -o DIR: synthetic input sequences with ground truth (blobs, morph, metaballs, splash) or a
 // coherent sequence re-meshed through a level set (resurface SRC). The work is in kernels/gen.
 #include <cstdio>
 #include <iostream>
@@ -48,10 +48,10 @@ void run_gen(GenOptions& opt) {
 void add_gen_command(CLI::App& app) {
   auto opt = std::make_shared<GenOptions>();
   CLI::App* sub = app.add_subcommand(
-      "gen", "Generate an input sequence with ground truth: blobs, morph, metaballs, or resurface SRC");
-  sub->add_option("KIND", opt->params.kind, "blobs | morph | metaballs | resurface")
+      "gen", "Generate an input sequence with ground truth: blobs, morph, metaballs, splash, or resurface SRC");
+  sub->add_option("KIND", opt->params.kind, "blobs | morph | metaballs | splash | resurface")
       ->required()
-      ->check(CLI::IsMember({"blobs", "morph", "metaballs", "resurface"}));
+      ->check(CLI::IsMember({"blobs", "morph", "metaballs", "splash", "resurface"}));
   sub->add_option("SRC", opt->params.source, "resurface: the coherent source sequence (folder, glob or pattern)");
   sub->add_option("-o,--output", opt->out, "output folder")->required();
   sub->add_option("--frames", opt->params.frames, "number of frames (default 60; resurface: all source frames)")

@@ -49,7 +49,10 @@ nlohmann::json frames_json(const GenReport& report) {
     nlohmann::json j{{"frame", f.frame},        {"file", f.file},     {"vertices", f.vertices},
                      {"triangles", f.triangles}, {"components", f.components}, {"genus", f.genus},
                      {"seconds", f.seconds}};
-    if (!f.source_file.empty()) j["source"] = f.source_file;
+    if (!f.source_file.empty()) {
+      j["source"] = f.source_file;
+      j["voids_filled"] = f.voids_filled;
+    }
     a.push_back(j);
   }
   return a;
@@ -140,7 +143,11 @@ GenReport generate_resurface(const GenParams& params, const fs::path& dir, nlohm
     r.source_file = src.string();
     MeshData mesh;
     try {
-      mesh = resurface(source, {report.voxel_size, 2.0});
+      ResurfaceParams rp;
+      rp.voxel_size = report.voxel_size;
+      ResurfaceReport rr;
+      mesh = resurface(source, rp, &rr);
+      r.voids_filled = rr.voids_filled + rr.islands_removed;
     } catch (const InvalidInput& e) {
       TT_THROW(InvalidInput, src.string() << ": " << e.what());
     }

@@ -17,6 +17,7 @@ struct GenFrameReport {
   std::string source_file;  //!< resurface: the source frame
   std::size_t vertices = 0, triangles = 0;
   long components = 0, genus = 0;
+  std::size_t voids_filled = 0;  //!< resurface: enclosed cavities filled (ResurfaceReport)
   double seconds = 0;
 };
 

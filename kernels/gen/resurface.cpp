@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 
+#include "kernels/gen/fill_voids.hpp"
 #include "kernels/sdf/marching_cubes.hpp"
 #include "kernels/sdf/signed_distance.hpp"
 
@@ -33,12 +34,18 @@ MeshData resurface(const MeshData& source, const ResurfaceParams& params, Resurf
   const auto t1 = Clock::now();
   MeshData out = marching_cubes(*grid);
   const auto t2 = Clock::now();
+  FillVoidsReport fill;
+  if (params.fill_voids) out = fill_voids(out, &fill);
+  const auto t3 = Clock::now();
   if (report) {
     report->active_voxels = sdf_report.active_voxels;
     report->signs_flipped = sdf_report.signs_flipped;
     report->thin_vertices = sdf_report.thin_vertices;
     report->seconds_distance = std::chrono::duration<double>(t1 - t0).count();
     report->seconds_marching = std::chrono::duration<double>(t2 - t1).count();
+    report->voids_filled = fill.voids_filled;
+    report->islands_removed = fill.islands_removed;
+    report->seconds_fill = std::chrono::duration<double>(t3 - t2).count();
   }
   return out;
 }

@@ -8,6 +8,9 @@
 //! with genus 2); and a minimum thickness, because the elephant's ears are sheets 0.1 voxel thick, which
 //! marching cubes turned into a lace and 96 one-voxel specks (97 components in frame 1). 1.75 voxels is
 //! enough to keep the ears in one piece and moves the surface less than a voxel.
+//! A third, our choice: enclosed voids are filled (fill_voids.hpp), because the thickening and the winding
+//! number's union seal thin gaps of a self-intersecting capture into inner cavities (pcow frame 81: 2),
+//! and a captured body has none.
 #include "io/mesh_data.hpp"
 
 namespace topotrack {
@@ -19,13 +22,17 @@ struct ResurfaceParams {
   double exact_sign_band_voxels = 3.0;
   //! Parts thinner than this many voxels are thickened to it (kernels/sdf/thicken.hpp); 0: as they are.
   double min_thickness_voxels = 1.75;
+  //! Remove the components enclosed by others (cavity walls and what floats in them), fill_voids.hpp.
+  bool fill_voids = true;
 };
 
 struct ResurfaceReport {
   std::size_t active_voxels = 0;
   std::size_t signs_flipped = 0;     //!< voxels whose OpenVDB sign was wrong
   std::size_t thin_vertices = 0;     //!< source vertices on parts thinner than min_thickness_voxels
-  double seconds_distance = 0, seconds_marching = 0;
+  std::size_t voids_filled = 0;      //!< enclosed cavities removed (FillVoidsReport)
+  std::size_t islands_removed = 0;   //!< components inside a cavity removed with it
+  double seconds_distance = 0, seconds_marching = 0, seconds_fill = 0;
 };
 
 //! \pre `source` is a closed mesh. \throw InvalidInput on a bad voxel size, non-finite coordinates or an

@@ -20,6 +20,7 @@ int default_resolution(SyntheticKind kind) {
     case SyntheticKind::kBlobs: return 96;
     case SyntheticKind::kMorph: return 96;
     case SyntheticKind::kMetaballs: return 128;
+    case SyntheticKind::kSplash: return 96;
   }
   return 96;
 }
@@ -39,7 +40,8 @@ SyntheticKind synthetic_kind_from_name(const std::string& name) {
   if (name == "blobs") return SyntheticKind::kBlobs;
   if (name == "morph") return SyntheticKind::kMorph;
   if (name == "metaballs") return SyntheticKind::kMetaballs;
-  TT_THROW(UsageError, "unknown sequence kind '" << name << "' (blobs, morph, metaballs)");
+  if (name == "splash") return SyntheticKind::kSplash;
+  TT_THROW(UsageError, "unknown sequence kind '" << name << "' (blobs, morph, metaballs, splash)");
 }
 
 const char* synthetic_kind_name(SyntheticKind kind) {
@@ -47,11 +49,12 @@ const char* synthetic_kind_name(SyntheticKind kind) {
     case SyntheticKind::kBlobs: return "blobs";
     case SyntheticKind::kMorph: return "morph";
     case SyntheticKind::kMetaballs: return "metaballs";
+    case SyntheticKind::kSplash: return "splash";
   }
   return "?";
 }
 
-SyntheticScene::SyntheticScene(const SyntheticParams& params) : params_(params) {
+SyntheticScene::SyntheticScene(const SyntheticParams& params) : params_(params), splash_(params.seed) {
   if (params.frames < 1) TT_THROW(InvalidInput, "synthetic sequence: frames must be >= 1, got " << params.frames);
   resolution_ = params.resolution == 0 ? default_resolution(params.kind) : params.resolution;
   if (resolution_ < 8 || resolution_ > 4096)
@@ -92,6 +95,10 @@ SyntheticScene::SyntheticScene(const SyntheticParams& params) : params_(params) 
       box_.extend(Vec3::Constant(rho));
       break;
     }
+    case SyntheticKind::kSplash:
+      box_.extend(SplashScene::box_min());
+      box_.extend(SplashScene::box_max());
+      break;
   }
   const Vec3 extent = box_.max - box_.min;
   voxel_size_ = extent.maxCoeff() / resolution_;
@@ -150,6 +157,7 @@ double SyntheticScene::field(int frame, const Vec3& x) const {
       for (std::size_t i = 1; i < balls.size(); ++i) f = smooth_min(f, sphere(x, balls[i].center, balls[i].radius), kBallBlend);
       return f;
     }
+    case SyntheticKind::kSplash: return splash_.field(time(frame), x);
   }
   return 1.0;
 }
@@ -211,6 +219,13 @@ nlohmann::json SyntheticScene::ground_truth() const {
         nlohmann::json balls = nlohmann::json::array();
         for (const Ball& b : metaballs(n)) balls.push_back({{"center", vec_json(b.center)}, {"radius", b.radius}});
         f["balls"] = balls;
+        break;
+      }
+      case SyntheticKind::kSplash: {
+        nlohmann::json drops = nlohmann::json::array();
+        for (const SplashDrop& d : splash_.drops(time(n))) drops.push_back({{"center", vec_json(d.center)}, {"radius", d.radius}});
+        f["time"] = time(n);
+        f["drops"] = drops;
         break;
       }
     }

@@ -7,7 +7,9 @@
 //!  - morph:     a linear blend of signed distance functions of shapes of different genus: torus (genus 1)
 //!               -> two spheres (mid-way) -> one sphere (last frame);
 //!  - metaballs: four balls that start merged, fly apart (splitting into up to four components) and merge
-//!               again while the group turns.
+//!               again while the group turns;
+//!  - splash:    a drop falling into a pool: merge, crown, rim droplets pinching off and falling back, a
+//!               jet shedding a drop (kernels/gen/splash.hpp); ground truth is the free drops of each frame.
 #include <Eigen/Core>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -15,11 +17,12 @@
 
 #include "io/mesh_data.hpp"
 #include "kernels/gen/implicit_grid.hpp"
+#include "kernels/gen/splash.hpp"
 
 namespace topotrack {
 
-enum class SyntheticKind { kBlobs, kMorph, kMetaballs };
-//! "blobs", "morph", "metaballs". \throw UsageError for any other name.
+enum class SyntheticKind { kBlobs, kMorph, kMetaballs, kSplash };
+//! "blobs", "morph", "metaballs", "splash". \throw UsageError for any other name.
 SyntheticKind synthetic_kind_from_name(const std::string& name);
 const char* synthetic_kind_name(SyntheticKind kind);
 
@@ -67,9 +70,12 @@ public:
   std::pair<int, double> morph_blend(int frame) const;
   //! metaballs: the balls of frame n.
   std::vector<Ball> metaballs(int frame) const;
+  //! splash: the scene (its drops(t) at t = (n - 1) / (frames - 1)).
+  const SplashScene& splash() const { return splash_; }
 
   //! Everything needed to check a result: blobs {"frames": [{"frame", "rotation" (3x3 rows), "center"}]},
-  //! morph {"frames": [{"frame", "stage", "weight"}]}, metaballs {"frames": [{"frame", "balls": [{center, radius}]}]}.
+  //! morph {"frames": [{"frame", "stage", "weight"}]}, metaballs {"frames": [{"frame", "balls": [{center, radius}]}]},
+  //! splash {"frames": [{"frame", "time", "drops": [{center, radius}]}]}.
   nlohmann::json ground_truth() const;
 
 private:
@@ -88,6 +94,7 @@ private:
   Vec3 axis_ = Vec3::UnitZ();
   std::vector<Vec3> ball_dirs_;
   std::vector<double> ball_radii_;
+  SplashScene splash_;
 };
 
 }  // namespace topotrack
