@@ -3,6 +3,7 @@
 # undefined) in ./build-fuzz (or $BUILD_DIR), then runs each for SECONDS, one after the other.
 #   bash tools/fuzz.sh              30 s per target (CI)
 #   bash tools/fuzz.sh 300 fuzz_ply 5 minutes, one target
+#   JOBS=1 bash tools/fuzz.sh 300   build one job at a time (a shared, loaded machine)
 # Seeds: tests/fuzz/seeds/<kind>, tests/data (bad corpus, events, sequences), and the corpus grown by earlier
 # runs in $BUILD_DIR/corpus/<target>. A finding is saved as $BUILD_DIR/artifacts/<target>/crash-* (or leak-,
 # timeout-, oom-) and the script exits 1 after the remaining targets ran: reproduce with
@@ -18,7 +19,7 @@ targets=("$@")
 CXX=${CXX:-clang++-14} cmake -S . -B "$BUILD_DIR" -DCMAKE_BUILD_TYPE=RelWithDebInfo \
   -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g" -DTOPOTRACK_FUZZ=ON -DTOPOTRACK_SANITIZE=address,undefined \
   -DTOPOTRACK_BUILD_BENCH=OFF >/dev/null
-cmake --build "$BUILD_DIR" -j"$(nproc)" --target "${targets[@]}"
+cmake --build "$BUILD_DIR" -j"${JOBS:-$(nproc)}" --target "${targets[@]}"
 
 export ASAN_OPTIONS=${ASAN_OPTIONS:-detect_leaks=1:halt_on_error=1}
 export UBSAN_OPTIONS=${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}
@@ -43,6 +44,8 @@ for t in "${targets[@]}"; do
     echo "fuzz.sh: $t found a failure, see $BUILD_DIR/$t.log and $artifacts/" >&2
     grep -E "ERROR|runtime error|broken promise|Test unit written" "$BUILD_DIR/$t.log" | head -5 >&2 || true
   fi
+  # Coverage at the start and the end of the run (cov: edges covered, ft: features, corp: units/bytes).
+  grep -E "^#[0-9]+[[:space:]]+(INITED|DONE)" "$BUILD_DIR/$t.log" || true
   grep -E "^stat::(number_of_executed_units|average_exec_per_sec|new_units_added|peak_rss_mb)" \
     "$BUILD_DIR/$t.log" || true
 done

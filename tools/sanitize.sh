@@ -12,6 +12,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 BUILD_DIR=${BUILD_DIR:-build-asan}
 SANITIZE=${SANITIZE:-address,undefined}
+JOBS=${JOBS:-$(nproc)}  # build and ctest parallelism (JOBS=1 on a shared, loaded machine)
 exclude='slow|install'
 targets=()
 args=()
@@ -26,14 +27,19 @@ done
 cmake -S . -B "$BUILD_DIR" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g1 -DNDEBUG" \
   -DTOPOTRACK_SANITIZE="$SANITIZE" -DTOPOTRACK_BUILD_BENCH=OFF >/dev/null
 if [[ ${#targets[@]} -gt 0 ]]; then
-  cmake --build "$BUILD_DIR" -j"$(nproc)" --target "${targets[@]}"
+  cmake --build "$BUILD_DIR" -j"$JOBS" --target "${targets[@]}"
   args+=(-E '_NOT_BUILT$')  # the test executables not built here
 else
-  cmake --build "$BUILD_DIR" -j"$(nproc)"
+  cmake --build "$BUILD_DIR" -j"$JOBS"
 fi
 
 # Findings are fatal (halt_on_error, -fno-sanitize-recover) and print a stack; leaks are findings too.
 export ASAN_OPTIONS=${ASAN_OPTIONS:-detect_leaks=1:halt_on_error=1:detect_stack_use_after_return=1:check_initialization_order=1:strict_init_order=1}
 export UBSAN_OPTIONS=${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}
 cd "$BUILD_DIR"
-ctest --output-on-failure -j"$(nproc)" --timeout 900 -LE "$exclude" "${args[@]}"
+status=0
+ctest --output-on-failure -j"$JOBS" --timeout 900 -LE "$exclude" "${args[@]}" || status=$?
+# What makes the run long: the slowest tests of this and earlier runs (seconds under the sanitizers).
+echo "slowest tests under $SANITIZE:"
+sort -k3 -g -r Testing/Temporary/CTestCostData.txt 2>/dev/null | awk 'NF == 3 {printf "  %8.1f s  %s\n", $3, $1}' | head -15
+exit $status

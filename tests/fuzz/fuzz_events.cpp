@@ -1,6 +1,11 @@
 // libFuzzer target: the event-list file reader (io/event_file). What it accepts must round-trip:
 // encode(decode(x)) decodes again, to a list that encodes to the same bytes.
+// Each input is read twice: as it is, and with its last 8 bytes replaced by the checksum of the rest
+// (FNV-1a 64, little endian, as io/event_file.cpp writes it). Without the second reading a mutation almost
+// never keeps the checksum right, and the fuzzer never gets past it into the body (5 minutes: 330 edges,
+// no new input).
 #include <cstdint>
+#include <cstring>
 #include <string>
 #include <string_view>
 
@@ -8,13 +13,24 @@
 #include "io/event_file.hpp"
 #include "tests/fuzz/fuzz_check.hpp"
 
-extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+namespace {
+
+std::uint64_t fnv1a(std::string_view bytes) {
+  std::uint64_t h = 0xcbf29ce484222325ull;
+  for (unsigned char c : bytes) {
+    h ^= c;
+    h *= 0x100000001b3ull;
+  }
+  return h;
+}
+
+void check(std::string_view bytes) {
   using namespace topotrack;
   EventList events;
   try {
-    events = decode_events(std::string_view(reinterpret_cast<const char*>(data), size), "fuzz.events");
+    events = decode_events(bytes, "fuzz.events");
   } catch (const Error&) {
-    return 0;
+    return;
   }
   const std::string once = encode_events(events);
   EventList again;
@@ -26,5 +42,18 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   if (again.size() != events.size() || again.rule_count() != events.rule_count() ||
       again.term_count() != events.term_count() || encode_events(again) != once)
     fuzz::broken("event list changes through encode/decode");
+}
+
+}  // namespace
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  const std::string_view raw(reinterpret_cast<const char*>(data), size);
+  check(raw);
+  if (size >= 8) {
+    std::string sealed(raw);
+    const std::uint64_t h = fnv1a(std::string_view(sealed).substr(0, size - 8));
+    for (int i = 0; i < 8; ++i) sealed[size - 8 + std::size_t(i)] = char((h >> (8 * i)) & 0xff);
+    check(sealed);
+  }
   return 0;
 }
