@@ -11,6 +11,15 @@
 
 namespace topotrack {
 
+std::uint64_t event_file_checksum(std::string_view bytes) {
+  std::uint64_t h = 0xcbf29ce484222325ull;  // FNV-1a 64
+  for (unsigned char c : bytes) {
+    h ^= c;
+    h *= 0x100000001b3ull;
+  }
+  return h;
+}
+
 namespace {
 
 // Layout (docs/formats.md, "Event list file"): all integers little endian, no padding.
@@ -21,15 +30,6 @@ constexpr std::size_t kEventHeadBytes = 1 + 4 * 4;
 constexpr std::size_t kRuleHeadBytes = 8 + 4;
 constexpr std::size_t kTermBytes = 8 + 8;
 constexpr std::size_t kChecksumBytes = 8;
-
-std::uint64_t fnv1a(std::string_view bytes) {
-  std::uint64_t h = 0xcbf29ce484222325ull;
-  for (unsigned char c : bytes) {
-    h ^= c;
-    h *= 0x100000001b3ull;
-  }
-  return h;
-}
 
 template <class T>
 void put(std::string& s, T v) {
@@ -126,7 +126,7 @@ std::string encode_events(const EventList& events) {
     for (std::size_t r = v.forward_begin; r < v.forward_end; ++r) rule(r);
     for (std::size_t r = v.backward_begin; r < v.backward_end; ++r) rule(r);
   }
-  put<std::uint64_t>(s, fnv1a(s));
+  put<std::uint64_t>(s, event_file_checksum(s));
   return s;
 }
 
@@ -154,7 +154,7 @@ EventList decode_events(std::string_view bytes, const std::string& name) {
     Reader tail(bytes.substr(body_end), name);
     tail.set_end(kChecksumBytes);
     const auto stored = tail.get<std::uint64_t>("the checksum");
-    if (stored != fnv1a(bytes.substr(0, body_end)))
+    if (stored != event_file_checksum(bytes.substr(0, body_end)))
       in.fail_at(body_end, "checksum mismatch: the file is corrupt or truncated");
   }
   // Never trust the totals: each must fit in what the body can hold (EventList indexes with 32 bits).

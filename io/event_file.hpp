@@ -1,6 +1,7 @@
 #pragma once
 //! The binary event-list file (§4.4), documented in docs/formats.md: a header with magic and version,
 //! counts, then the records.
+#include <cstdint>
 #include <filesystem>
 #include <string>
 #include <string_view>
@@ -14,6 +15,9 @@ std::string encode_events(const EventList& events);
 //! \throw InvalidInput "<name>: byte <offset>: <fault>" on a bad magic, unsupported version, truncation,
 //! lying counts, unknown event kind, non-finite weight or trailing bytes.
 EventList decode_events(std::string_view bytes, const std::string& name);
+//! The checksum an event file ends with (FNV-1a 64 of every byte before it), for tools and tests that
+//! build or repair files by hand.
+std::uint64_t event_file_checksum(std::string_view bytes);
 
 //! Atomic write. \throw IoError naming the path; InvalidInput as encode_events.
 void write_events(const std::filesystem::path& path, const EventList& events);

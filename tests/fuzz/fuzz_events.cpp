@@ -1,7 +1,7 @@
 // libFuzzer target: the event-list file reader (io/event_file). What it accepts must round-trip:
 // encode(decode(x)) decodes again, to a list that encodes to the same bytes.
 // Each input is read twice: as it is, and with its last 8 bytes replaced by the checksum of the rest
-// (FNV-1a 64, little endian, as io/event_file.cpp writes it). Without the second reading a mutation almost
+// (event_file_checksum, little endian, as io/event_file.cpp writes it). Without the second reading a mutation almost
 // never keeps the checksum right, and the fuzzer never gets past it into the body (5 minutes: 330 edges,
 // no new input).
 #include <cstdint>
@@ -14,15 +14,6 @@
 #include "tests/fuzz/fuzz_check.hpp"
 
 namespace {
-
-std::uint64_t fnv1a(std::string_view bytes) {
-  std::uint64_t h = 0xcbf29ce484222325ull;
-  for (unsigned char c : bytes) {
-    h ^= c;
-    h *= 0x100000001b3ull;
-  }
-  return h;
-}
 
 void check(std::string_view bytes) {
   using namespace topotrack;
@@ -51,7 +42,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   check(raw);
   if (size >= 8) {
     std::string sealed(raw);
-    const std::uint64_t h = fnv1a(std::string_view(sealed).substr(0, size - 8));
+    const std::uint64_t h = topotrack::event_file_checksum(std::string_view(sealed).substr(0, size - 8));
     for (int i = 0; i < 8; ++i) sealed[size - 8 + std::size_t(i)] = char((h >> (8 * i)) & 0xff);
     check(sealed);
   }

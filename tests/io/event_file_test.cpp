@@ -38,20 +38,12 @@ EventList sample_events() {
   return l;
 }
 
-std::uint64_t fnv1a(std::string_view bytes) {
-  std::uint64_t h = 0xcbf29ce484222325ull;
-  for (unsigned char c : bytes) {
-    h ^= c;
-    h *= 0x100000001b3ull;
-  }
-  return h;
-}
 // Overwrite bytes [at, at+sizeof v) with v (little endian host) and fix the checksum, so that only the
 // structural checks stand between the reader and the lie.
 template <class T>
 std::string forge(std::string bytes, std::size_t at, T v) {
   std::memcpy(bytes.data() + at, &v, sizeof v);
-  const std::uint64_t h = fnv1a(std::string_view(bytes).substr(0, bytes.size() - 8));
+  const std::uint64_t h = event_file_checksum(std::string_view(bytes).substr(0, bytes.size() - 8));
   std::memcpy(bytes.data() + bytes.size() - 8, &h, 8);
   return bytes;
 }
