@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 
 #include "kernels/raycast/target_surface.hpp"
 #include "kernels/sdf/winding_number.hpp"
@@ -99,6 +100,81 @@ std::vector<std::int8_t> winding_sides(std::span<const Vec3> P, std::span<const 
   return side;
 }
 
+//! The winding-number sign for the inactive voxels of the leaves where OpenVDB's flood-filled sign
+//! contradicts the corrected band. Where the surface crosses itself that sign can say inside where the
+//! winding number says outside (measured on the elephant: -2.375 voxels beyond the band next to active
+//! voxels at +1.8 to +2.3 after their correction), and marching cubes then puts a zero crossing between
+//! them, two voxels off the surface. Such a crossing can only be wrong: an inactive voxel lies at least
+//! the band's width from the surface, so it cannot have the opposite sign of a face neighbour. The
+//! winding number is evaluated in the leaves holding one such pair only (on an elephant frame 0.14 s
+//! instead of 1.2 s for every inactive voxel and tile, same result). Changed voxels become active, so
+//! marching cubes visits their cells (it skips cells without an active corner: the surface would be open).
+//! Magnitudes are kept. Returns the number of voxels whose sign changed.
+std::size_t winding_signs_off_band(openvdb::FloatGrid& phi, std::span<const Vec3> P,
+                                   std::span<const std::array<Index, 3>> T) {
+  using Leaf = openvdb::FloatTree::LeafNodeType;
+  openvdb::tree::LeafManager<openvdb::FloatTree> leaves(phi.tree());
+  // Leaves with an inactive voxel whose face neighbour (in this leaf or the next) is active with the
+  // other sign. Read only; each leaf decides alone, so the result does not depend on the thread count.
+  std::vector<std::uint8_t> conflict(leaves.leafCount(), 0);
+  leaves.foreach([&](const Leaf& leaf, std::size_t i) {
+    if (leaf.isValueMaskOn()) return;
+    std::optional<openvdb::tree::ValueAccessor<const openvdb::FloatTree>> acc;  // for neighbours in other leaves, made when needed
+    const openvdb::CoordBBox box = leaf.getNodeBoundingBox();
+    for (auto it = leaf.cbeginValueOff(); it && !conflict[i]; ++it) {
+      const openvdb::Coord c = it.getCoord();
+      const bool negative = *it < 0;
+      for (int axis = 0; axis < 3 && !conflict[i]; ++axis)
+        for (int step : {-1, 1}) {
+          openvdb::Coord n = c;
+          n[axis] += step;
+          float v;
+          bool on;
+          if (box.isInside(n)) {
+            on = leaf.probeValue(n, v);
+          } else {
+            if (!acc) acc.emplace(phi.tree());
+            on = acc->probeValue(n, v);
+          }
+          if (on && (v < 0) != negative) {
+            conflict[i] = 1;
+            break;
+          }
+        }
+    }
+  }, true, 1);
+  std::vector<std::size_t> count(leaves.leafCount() + 1, 0);
+  for (std::size_t i = 0; i < conflict.size(); ++i)
+    count[i + 1] = count[i] + (conflict[i] ? leaves.leaf(i).offVoxelCount() : 0);
+  std::vector<Vec3> points(count.back());
+  const openvdb::math::Transform& xform = phi.transform();
+  leaves.foreach([&](const Leaf& leaf, std::size_t i) {
+    if (!conflict[i]) return;
+    std::size_t k = count[i];
+    for (auto it = leaf.cbeginValueOff(); it; ++it) {
+      const openvdb::Vec3d w = xform.indexToWorld(it.getCoord());
+      points[k++] = Vec3(w.x(), w.y(), w.z());
+    }
+  });
+  const std::vector<std::int8_t> side = winding_sides(P, T, points);
+
+  std::vector<std::size_t> flipped(leaves.leafCount(), 0);
+  leaves.foreach([&](Leaf& leaf, std::size_t i) {
+    if (!conflict[i]) return;
+    std::size_t k = count[i];
+    std::vector<openvdb::Index> changed;
+    for (auto it = leaf.cbeginValueOff(); it; ++it) {
+      const int s = side[k++];
+      if (s != 0 && (*it < 0) != (s < 0)) changed.push_back(it.pos());
+    }
+    for (openvdb::Index o : changed) leaf.setValueOn(o, -leaf.getValue(o));
+    flipped[i] = changed.size();
+  });
+  std::size_t total = 0;
+  for (std::size_t f : flipped) total += f;
+  return total;
+}
+
 }  // namespace
 
 std::size_t correct_signs_near_surface(openvdb::FloatGrid& phi, std::span<const Vec3> P,
@@ -140,6 +216,7 @@ std::size_t correct_signs_near_surface(openvdb::FloatGrid& phi, std::span<const 
   });
   std::size_t total = 0;
   for (std::size_t f : flipped) total += f;
+  if (method == SignMethod::kWindingNumber) total += winding_signs_off_band(phi, P, T);
   return total;
 }
 

@@ -26,7 +26,10 @@ enum class SignMethod {
 
 //! Re-decide the sign of every active voxel of `phi` whose |value| is below `band` (world units) from the
 //! closest point of the mesh (positions, triangles) and its pseudonormal, or from the winding number;
-//! magnitudes are kept. Parallel, deterministic. Returns the number of voxels whose sign changed.
+//! magnitudes are kept. With the winding number, inactive voxels whose sign contradicts an active face
+//! neighbour's (OpenVDB's flood-filled sign beyond the band goes wrong next to self-intersections) are
+//! decided by it too, and made active; the pseudonormal method is for embedded meshes, where that sign is
+//! right. Parallel, deterministic. Returns the number of voxels whose sign changed.
 //! \pre the mesh is closed and consistently oriented (outward normals); phi is on that mesh.
 std::size_t correct_signs_near_surface(openvdb::FloatGrid& phi, std::span<const Vec3> positions,
                                        std::span<const std::array<Index, 3>> triangles, double band,

@@ -306,8 +306,11 @@ TEST(OpenSurface, RealFrameWithTrianglesRemoved) {
     far += d > L;
     largest = std::max(largest, d);
   }
+  std::printf("closed: %zu vertices, %zu more than L from the source, largest %.3f L\n", closed.n_vertices(), far,
+              largest / L);
+  // Before the winding-number sign beyond the band (exact_sign.cpp): 11 vertices over 1.5 L, largest 2.2 L.
   EXPECT_LT(far, closed.n_vertices() / 1000);
-  EXPECT_LT(largest, 2.5 * L);
+  EXPECT_LT(largest, 1.25 * L);
 }
 
 }  // namespace
