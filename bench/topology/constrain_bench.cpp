@@ -109,19 +109,36 @@ void BM_LatticeCut(benchmark::State& state) {
   state.counters["vertices"] = double(p.mesh.n_vertices());
   state.counters["pieces"] = double(pieces);
 }
+void BM_IndexCells(benchmark::State& state) {
+  const Pair& p = scene_pair(int(state.range(0)));
+  const openvdb::FloatGrid::Ptr theta = signed_distance(p.mesh, p.voxel);
+  const topology::LatticeCut cut = topology::cut_by_lattice(p.mesh, theta->transform());
+  std::size_t n = 0, flipped = 0;
+  for (auto _ : state) {
+    const topology::CellIndex index = topology::index_cells(cut, *theta);
+    n = index.cells.size();
+    flipped = index.flipped.size();
+  }
+  state.counters["vertices"] = double(p.mesh.n_vertices());
+  state.counters["cells"] = double(n);
+  state.counters["flipped"] = double(flipped);
+}
+// Second argument: 0 the reference per-cell test, 1 the fast one (the before / after of classify_fast.hpp).
 void BM_ClassifyCells(benchmark::State& state) {
   const Pair& p = scene_pair(int(state.range(0)));
   const openvdb::FloatGrid::Ptr theta = signed_distance(p.mesh, p.voxel);
   const topology::LatticeCut cut = topology::cut_by_lattice(p.mesh, theta->transform());
   const topology::CellIndex index = topology::index_cells(cut, *theta);
+  const auto path = state.range(1) == 0 ? topology::ClassifyPath::kReference : topology::ClassifyPath::kFast;
   std::size_t n = 0;
-  for (auto _ : state) n = topology::complex_cells(p.mesh, cut, index, *theta).size();
+  for (auto _ : state) n = topology::complex_cells(p.mesh, cut, index, *theta, path).size();
   state.counters["vertices"] = double(p.mesh.n_vertices());
   state.counters["cells"] = double(index.cells.size());
   state.counters["complex"] = double(n);
 }
 BENCHMARK(BM_LatticeCut)->Arg(100)->Arg(200)->Arg(300)->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime()->UseRealTime();
-BENCHMARK(BM_ClassifyCells)->Arg(100)->Arg(200)->Arg(300)->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime()->UseRealTime();
+BENCHMARK(BM_IndexCells)->Arg(100)->Arg(200)->Arg(300)->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime()->UseRealTime();
+BENCHMARK(BM_ClassifyCells)->ArgsProduct({{100, 200, 300}, {0, 1}})->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime()->UseRealTime();
 
 BENCHMARK(BM_SignedDistanceOnly)->Arg(100)->Arg(200)->Arg(300)->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime()->UseRealTime();
 BENCHMARK(BM_ConstrainSelfOnly)->Arg(100)->Arg(200)->Arg(300)->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime()->UseRealTime();

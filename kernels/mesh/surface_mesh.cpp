@@ -1,5 +1,7 @@
 #include "kernels/mesh/surface_mesh.hpp"
 
+#include <tbb/parallel_sort.h>
+
 #include <algorithm>
 #include <numeric>
 
@@ -62,7 +64,9 @@ SurfaceMesh SurfaceMesh::from_triangles(std::span<const Vec3> positions,
       const Index u = triangles[f][k], v = triangles[f][(k + 1) % 3];
       keys[3 * f + k] = Key{std::min(u, v), std::max(u, v), Index(3 * f + k)};
     }
-  std::sort(keys.begin(), keys.end(), [](const Key& x, const Key& y) {
+  // Keys are unique (each carries its corner), so the parallel sort's order is the one order: deterministic.
+  // It runs on every ConstrainTopology rebuild (~8 % of constrain's CPU at 109k vertices when serial).
+  tbb::parallel_sort(keys.begin(), keys.end(), [](const Key& x, const Key& y) {
     return std::tie(x.a, x.b, x.corner) < std::tie(y.a, y.b, y.corner);
   });
   std::vector<Halfedge> corner_he(3 * nf);

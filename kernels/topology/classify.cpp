@@ -1,14 +1,18 @@
 #include "kernels/topology/classify.hpp"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <numeric>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
 #include <tbb/parallel_sort.h>
 
 #include "kernels/sdf/cube_table.hpp"
+#include "kernels/topology/classify_fast.hpp"
 
 namespace topotrack::topology {
 namespace {
@@ -215,30 +219,68 @@ std::uint8_t theta_mask(const openvdb::FloatGrid::ConstAccessor& acc, const Cell
 
 namespace {
 
-using CellPieces = std::vector<std::pair<std::uint64_t, std::uint32_t>>;  // (cell, piece), sorted
+// The number of M's crossings of the six lattice edges at each node of `near` (sorted keys): entry 6 i + s
+// for node near[i] and the edge to its neighbour along axis s / 2, downwards when s is even. A crossing is a
+// face point of a piece: one pass over the pieces (in order, cache-friendly), each face point looked up in a
+// hash table of the near nodes, then the distinct (edge, face) pairs counted.
+std::vector<std::uint32_t> near_edge_crossings(const LatticeCut& cut, const std::vector<std::uint64_t>& near) {
+  std::vector<std::uint32_t> count(near.size() * 6, 0);
+  if (near.empty()) return count;
+  int bits = 4;
+  while ((std::size_t(1) << bits) < 4 * near.size()) ++bits;
+  const std::uint64_t mask = (std::uint64_t(1) << bits) - 1, empty = ~std::uint64_t(0);
+  std::vector<std::uint64_t> table_key(mask + 1, empty);
+  std::vector<std::uint32_t> table_index(mask + 1, 0);
+  auto slot = [&](std::uint64_t k) { return (k * 0x9E3779B97F4A7C15ull) >> (64 - bits); };
+  for (std::size_t i = 0; i < near.size(); ++i) {
+    std::uint64_t h = slot(near[i]);
+    while (table_key[h] != empty) h = (h + 1) & mask;
+    table_key[h] = near[i];
+    table_index[h] = std::uint32_t(i);
+  }
+  auto find_near = [&](std::uint64_t k) -> std::int64_t {
+    for (std::uint64_t h = slot(k);; h = (h + 1) & mask) {
+      if (table_key[h] == k) return table_index[h];
+      if (table_key[h] == empty) return -1;
+    }
+  };
+  constexpr std::size_t kChunk = 16384;
+  const std::size_t np = cut.pieces.size(), n_chunks = (np + kChunk - 1) / kChunk;
+  std::vector<std::vector<std::uint64_t>> found(n_chunks);  // (edge slot << 32) | face
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n_chunks), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t c = r.begin(); c != r.end(); ++c)
+      for (std::size_t p = c * kChunk; p < std::min(np, (c + 1) * kChunk); ++p) {
+        const Piece& pc = cut.pieces[p];
+        for (int i = 0; i < pc.size; ++i) {
+          const PointKey& k = cut.keys[pc.begin + i];
+          if (kind(k) != PointKind::FacePoint) continue;
+          // On the lattice edge along L from node lo (the piece's cell's own coordinate along L) to lo + 1.
+          const int L = key_axis(k), ua = L == 0 ? 1 : 0, va = L == 2 ? 1 : 2;
+          openvdb::Coord lo = cell_from_key(pc.cell);
+          lo[ua] = key_plane_u(k);
+          lo[va] = key_plane_v(k);
+          openvdb::Coord hi = lo;
+          hi[L] += 1;
+          if (const std::int64_t a = find_near(cell_key(lo)); a >= 0)
+            found[c].push_back(std::uint64_t(6 * a + 2 * L + 1) << 32 | key_element(k));
+          if (const std::int64_t b = find_near(cell_key(hi)); b >= 0)
+            found[c].push_back(std::uint64_t(6 * b + 2 * L) << 32 | key_element(k));
+        }
+      }
+  });
+  std::vector<std::uint64_t> all;
+  for (const auto& f : found) all.insert(all.end(), f.begin(), f.end());
+  tbb::parallel_sort(all.begin(), all.end());
+  all.erase(std::unique(all.begin(), all.end()), all.end());
+  for (std::uint64_t e : all) ++count[e >> 32];
+  return count;
+}
 
 // Whether node `n` (|Θ| < kSignTolerance voxels) is inside, from its lattice-edge neighbours farther from
-// the zero set and the parity of M's crossings of the edges to them (see kSignTolerance); `raw` when they
-// disagree or there is none.
-bool resolve_node_sign(const LatticeCut& cut, const CellPieces& by_cell, const openvdb::FloatGrid::ConstAccessor& acc,
-                       const openvdb::Coord& n, float tol, bool raw, std::array<std::vector<Index>, 6>& faces) {
-  for (auto& f : faces) f.clear();
-  // Every crossing of the six lattice edges at n is a face point of a piece in one of the eight cells around n.
-  for (int d = 0; d < 8; ++d) {
-    const openvdb::Coord cell = n.offsetBy(-(d & 1), -((d >> 1) & 1), -((d >> 2) & 1));
-    const std::uint64_t ck = cell_key(cell);
-    for (auto it = std::lower_bound(by_cell.begin(), by_cell.end(), std::make_pair(ck, std::uint32_t(0)));
-         it != by_cell.end() && it->first == ck; ++it) {
-      const Piece& pc = cut.pieces[it->second];
-      for (int i = 0; i < pc.size; ++i) {
-        const PointKey& k = cut.keys[pc.begin + i];
-        if (kind(k) != PointKind::FacePoint) continue;
-        const int L = key_axis(k), ua = L == 0 ? 1 : 0, va = L == 2 ? 1 : 2;
-        if (key_plane_u(k) != n[ua] || key_plane_v(k) != n[va]) continue;
-        faces[2 * L + (cell[L] == n[L] ? 1 : 0)].push_back(key_element(k));
-      }
-    }
-  }
+// the zero set and the parity of M's crossings of the edges to them (`crossings`, see near_edge_crossings
+// and kSignTolerance); `raw` when they disagree or there is none.
+bool resolve_node_sign(const openvdb::FloatGrid::ConstAccessor& acc, const openvdb::Coord& n, float tol, bool raw,
+                       const std::uint32_t* crossings) {
   int votes[2] = {0, 0};
   for (int s = 0; s < 6; ++s) {
     const int L = s >> 1;
@@ -246,14 +288,78 @@ bool resolve_node_sign(const LatticeCut& cut, const CellPieces& by_cell, const o
     m[L] += (s & 1) ? 1 : -1;
     const float vm = acc.getValue(m);
     if (!(std::abs(vm) >= tol)) continue;
-    auto& f = faces[s];
-    std::sort(f.begin(), f.end());
-    const std::size_t crossings = std::size_t(std::unique(f.begin(), f.end()) - f.begin());
-    ++votes[int((vm < 0.f) != (crossings % 2 == 1))];
+    ++votes[int((vm < 0.f) != (crossings[s] % 2 == 1))];
   }
   if (votes[0] > 0 && votes[1] == 0) return false;
   if (votes[1] > 0 && votes[0] == 0) return true;
   return raw;
+}
+
+struct CellPiece {
+  std::uint64_t first;   // cell key
+  std::uint32_t second;  // piece
+  bool operator<(const CellPiece& o) const { return first != o.first ? first < o.first : second < o.second; }
+};
+
+// The (cell, piece) pairs of the cut sorted. When the cells' extent allows, each pair is packed into one
+// 64-bit word (cell coordinates relative to their minimum, in as many bits as their range needs, then the
+// piece index), which sorts about twice as fast as the 16-byte pairs; the order is the same.
+HugeVector<CellPiece> pieces_by_cell(const LatticeCut& cut) {
+  const std::size_t np = cut.pieces.size();
+  HugeVector<CellPiece> out(np);
+  constexpr std::uint64_t kField = (std::uint64_t(1) << 21) - 1;
+  constexpr int kShiftOf[3] = {42, 21, 0};
+  using Range = std::array<std::uint64_t, 6>;  // lo x, y, z, hi x, y, z of the key fields
+  const Range range = tbb::parallel_reduce(
+      tbb::blocked_range<std::size_t>(0, np, 16384), Range{kField, kField, kField, 0, 0, 0},
+      [&](const tbb::blocked_range<std::size_t>& r, Range acc) {
+        for (std::size_t i = r.begin(); i != r.end(); ++i)
+          for (int a = 0; a < 3; ++a) {
+            const std::uint64_t f = (cut.pieces[i].cell >> kShiftOf[a]) & kField;
+            acc[a] = std::min(acc[a], f);
+            acc[3 + a] = std::max(acc[3 + a], f);
+          }
+        return acc;
+      },
+      [](Range x, const Range& y) {
+        for (int a = 0; a < 3; ++a) x[a] = std::min(x[a], y[a]), x[3 + a] = std::max(x[3 + a], y[3 + a]);
+        return x;
+      });
+  auto width = [](std::uint64_t v) { return v == 0 ? 0 : 64 - std::countl_zero(v); };
+  int w[3] = {0, 0, 0};
+  for (int a = 0; a < 3; ++a) w[a] = np ? width(range[3 + a] - range[a]) : 0;
+  const int wp = np ? width(np - 1) : 0;
+  if (w[0] + w[1] + w[2] + wp > 64) {
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, np, 8192), [&](const tbb::blocked_range<std::size_t>& r) {
+      for (std::size_t i = r.begin(); i != r.end(); ++i) out[i] = {cut.pieces[i].cell, std::uint32_t(i)};
+    });
+    tbb::parallel_sort(out.begin(), out.end());
+    return out;
+  }
+  const int sp = wp, sz = sp + w[2], sy = sz + w[1];
+  auto shl = [](std::uint64_t v, int shift) { return shift >= 64 ? std::uint64_t(0) : v << shift; };
+  HugeVector<std::uint64_t> packed(np);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, np, 8192), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t i = r.begin(); i != r.end(); ++i) {
+      const std::uint64_t k = cut.pieces[i].cell;
+      packed[i] = shl(((k >> 42) & kField) - range[0], sy) | shl(((k >> 21) & kField) - range[1], sz) |
+                  shl((k & kField) - range[2], sp) | std::uint64_t(i);
+    }
+  });
+  tbb::parallel_sort(packed.begin(), packed.end());
+  const std::uint64_t piece_mask = wp == 64 ? ~std::uint64_t(0) : (std::uint64_t(1) << wp) - 1;
+  auto field = [](std::uint64_t v, int shift, int bits) {
+    return bits == 0 || shift >= 64 ? std::uint64_t(0) : (v >> shift) & ((std::uint64_t(1) << bits) - 1);
+  };
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, np, 8192), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t i = r.begin(); i != r.end(); ++i) {
+      const std::uint64_t v = packed[i];
+      const std::uint64_t cell = (field(v, sy, w[0]) + range[0]) << 42 | (field(v, sz, w[1]) + range[1]) << 21 |
+                                 (field(v, sp, w[2]) + range[2]);
+      out[i] = {cell, std::uint32_t(v & piece_mask)};
+    }
+  });
+  return out;
 }
 
 }  // namespace
@@ -261,11 +367,7 @@ bool resolve_node_sign(const LatticeCut& cut, const CellPieces& by_cell, const o
 CellIndex index_cells(const LatticeCut& cut, const openvdb::FloatGrid& theta) {
   CellIndex idx;
   const std::size_t np = cut.pieces.size();
-  CellPieces by_cell(np);
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, np, 8192), [&](const tbb::blocked_range<std::size_t>& r) {
-    for (std::size_t i = r.begin(); i != r.end(); ++i) by_cell[i] = {cut.pieces[i].cell, std::uint32_t(i)};
-  });
-  tbb::parallel_sort(by_cell.begin(), by_cell.end());
+  const HugeVector<CellPiece> by_cell = pieces_by_cell(cut);
 
   // Θ's sign-change cells and the nodes near its zero set, per leaf node.
   std::vector<const openvdb::FloatTree::LeafNodeType*> leaves;
@@ -275,7 +377,10 @@ CellIndex index_cells(const LatticeCut& cut, const openvdb::FloatGrid& theta) {
   const CellIndex raw;
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, leaves.size(), 16), [&](const tbb::blocked_range<std::size_t>& r) {
     auto acc = theta.getConstAccessor();
+    // Offsets of the eight corners of a cell within a leaf (x * 64 + y * 8 + z), in corner order.
+    constexpr int kCornerOffset[8] = {0, 64, 8, 72, 1, 65, 9, 73};
     for (std::size_t l = r.begin(); l != r.end(); ++l) {
+      const float* buf = leaves[l]->buffer().data();
       for (auto it = leaves[l]->cbeginValueOn(); it; ++it) {
         // A corner value beyond the cell diagonal means no sign change in the cell (Θ is a distance).
         if (std::abs(*it) > limit) continue;
@@ -284,7 +389,15 @@ CellIndex index_cells(const LatticeCut& cut, const openvdb::FloatGrid& theta) {
         for (int a = 0; a < 3; ++a) in_range = in_range && std::abs(c[a]) < kCellRange - 4;
         if (!in_range) continue;
         if (std::abs(*it) < tol) leaf_near[l].push_back(cell_key(c));
-        const std::uint8_t m = theta_mask(acc, raw, c);
+        // The cell's corners from the leaf's own buffer when they are all in it (getValue reads the same).
+        const auto off = it.pos();
+        std::uint8_t m = 0;
+        if ((off >> 6) < 7 && ((off >> 3) & 7) < 7 && (off & 7) < 7) {
+          for (int k = 0; k < 8; ++k)
+            if (buf[off + kCornerOffset[k]] < 0.f) m |= std::uint8_t(1u << k);
+        } else {
+          m = theta_mask(acc, raw, c);
+        }
         if (m != 0 && m != 255) leaf_cells[l].push_back(cell_key(c));
       }
     }
@@ -293,13 +406,13 @@ CellIndex index_cells(const LatticeCut& cut, const openvdb::FloatGrid& theta) {
   for (const auto& v : leaf_near) near.insert(near.end(), v.begin(), v.end());
   std::sort(near.begin(), near.end());
   std::vector<std::uint8_t> flip(near.size(), 0);
+  const std::vector<std::uint32_t> crossings = near_edge_crossings(cut, near);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, near.size(), 64), [&](const tbb::blocked_range<std::size_t>& r) {
     auto acc = theta.getConstAccessor();
-    std::array<std::vector<Index>, 6> faces;
     for (std::size_t i = r.begin(); i != r.end(); ++i) {
       const openvdb::Coord n = cell_from_key(near[i]);
       const bool inside = acc.getValue(n) < 0.f;
-      flip[i] = resolve_node_sign(cut, by_cell, acc, n, tol, inside, faces) != inside;
+      flip[i] = resolve_node_sign(acc, n, tol, inside, crossings.data() + 6 * i) != inside;
     }
   });
   std::vector<std::uint64_t> sign_cells;
@@ -318,13 +431,13 @@ CellIndex index_cells(const LatticeCut& cut, const openvdb::FloatGrid& theta) {
   idx.piece_begin.reserve(sign_cells.size() + np / 2 + 1);
   std::size_t i = 0, j = 0;
   while (i < np || j < sign_cells.size()) {
-    const std::uint64_t c = (j == sign_cells.size() || (i < np && by_cell[i].first <= sign_cells[j]))
-                                ? by_cell[i].first
-                                : sign_cells[j];
+    const auto& by = by_cell;
+    const std::uint64_t c = (j == sign_cells.size() || (i < np && by[i].first <= sign_cells[j])) ? by[i].first
+                                                                                                  : sign_cells[j];
     idx.cells.push_back(c);
     idx.piece_begin.push_back(std::uint32_t(i));
-    while (i < np && by_cell[i].first == c) {
-      idx.piece_order[i] = by_cell[i].second;
+    while (i < np && by[i].first == c) {
+      idx.piece_order[i] = by[i].second;
       ++i;
     }
     while (j < sign_cells.size() && sign_cells[j] == c) ++j;
@@ -334,22 +447,46 @@ CellIndex index_cells(const LatticeCut& cut, const openvdb::FloatGrid& theta) {
 }
 
 std::vector<CellVerdict> classify_cells(const SurfaceMesh& mesh, const LatticeCut& cut, const CellIndex& index,
-                                       const openvdb::FloatGrid& theta) {
+                                       const openvdb::FloatGrid& theta, ClassifyPath path) {
   const std::size_t n = index.cells.size();
   std::vector<CellVerdict> verdict(n, CellVerdict::kSimple);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 256), [&](const tbb::blocked_range<std::size_t>& r) {
     auto acc = theta.getConstAccessor();
     Scratch s;
+    std::unique_ptr<FastCellScratch> fs;
+    if (path == ClassifyPath::kFast) fs = std::make_unique<FastCellScratch>();
+    // The pieces of a cell come from scattered faces: fetch them a few cells ahead (the test is bound by
+    // these reads, not by its arithmetic).
+    auto prefetch = [&](std::size_t j, bool keys) {
+      if (j >= r.end()) return;
+      for (std::uint32_t k = index.piece_begin[j]; k < index.piece_begin[j + 1]; ++k) {
+        const Piece* pc = &cut.pieces[index.piece_order[k]];
+        if (!keys) {
+          __builtin_prefetch(pc);
+          continue;
+        }
+        __builtin_prefetch(&cut.keys[pc->begin]);
+        __builtin_prefetch(&cut.keys[pc->begin] + pc->size - 1);
+        __builtin_prefetch(&cut.tags[pc->begin]);
+      }
+    };
     for (std::size_t i = r.begin(); i != r.end(); ++i) {
+      if (fs) {
+        prefetch(i + 8, false);
+        prefetch(i + 4, true);
+      }
       const std::uint8_t mask = theta_mask(acc, index, cell_from_key(index.cells[i]));
-      verdict[i] = classify_cell(mesh, cut, index, i, mask, s);
+      std::optional<CellVerdict> v;
+      if (fs) v = classify_cell_fast(mesh, cut, index, i, mask, *fs);
+      verdict[i] = v ? *v : classify_cell(mesh, cut, index, i, mask, s);
     }
   });
   return verdict;
 }
 
-std::vector<std::uint64_t> complex_cells(const SurfaceMesh& mesh, const LatticeCut& cut, const CellIndex& index, const openvdb::FloatGrid& theta) {
-  const std::vector<CellVerdict> verdict = classify_cells(mesh, cut, index, theta);
+std::vector<std::uint64_t> complex_cells(const SurfaceMesh& mesh, const LatticeCut& cut, const CellIndex& index,
+                                         const openvdb::FloatGrid& theta, ClassifyPath path) {
+  const std::vector<CellVerdict> verdict = classify_cells(mesh, cut, index, theta, path);
   std::vector<std::uint64_t> out;
   for (std::size_t i = 0; i < verdict.size(); ++i)
     if (verdict[i] != CellVerdict::kSimple) out.push_back(index.cells[i]);

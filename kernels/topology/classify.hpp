@@ -24,7 +24,7 @@ namespace topotrack::topology {
 struct CellIndex {
   std::vector<std::uint64_t> cells;        //!< sorted cell keys
   std::vector<std::uint32_t> piece_begin;  //!< cell i has pieces piece_order[piece_begin[i], piece_begin[i+1])
-  std::vector<std::uint32_t> piece_order;  //!< piece indices grouped by cell, by piece index within a cell
+  HugeVector<std::uint32_t> piece_order;   //!< piece indices grouped by cell, by piece index within a cell
   //! Sorted keys (cell_key of the node) of the lattice nodes whose sign is the opposite of Θ's: see
   //! kSignTolerance.
   std::vector<std::uint64_t> flipped;
@@ -70,12 +70,18 @@ enum class CellVerdict : std::uint8_t {
   kCurvesCross,    //!< two of M's cut curves cross on a cube face
 };
 
+//! Which implementation of the per-cell test runs. Both give the same verdict for every cell (tested):
+//! kFast (classify_fast.hpp) works on cell-local flat arrays and falls back to kReference only for cells
+//! beyond its limits; kReference is the plain version, kept as the specification.
+enum class ClassifyPath : std::uint8_t { kFast, kReference };
+
 //! The verdict of every indexed cell (parallel, per-cell results, deterministic).
 std::vector<CellVerdict> classify_cells(const SurfaceMesh& mesh, const LatticeCut& cut, const CellIndex& index,
-                                        const openvdb::FloatGrid& theta);
+                                        const openvdb::FloatGrid& theta, ClassifyPath path = ClassifyPath::kFast);
 
 //! Classify every indexed cell in parallel (per-cell results, deterministic). Returns the sorted keys of
 //! the complex cells, including every cell of the boxes of the cut's bad faces.
-std::vector<std::uint64_t> complex_cells(const SurfaceMesh& mesh, const LatticeCut& cut, const CellIndex& index, const openvdb::FloatGrid& theta);
+std::vector<std::uint64_t> complex_cells(const SurfaceMesh& mesh, const LatticeCut& cut, const CellIndex& index,
+                                         const openvdb::FloatGrid& theta, ClassifyPath path = ClassifyPath::kFast);
 
 }  // namespace topotrack::topology

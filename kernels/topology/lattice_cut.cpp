@@ -24,26 +24,95 @@ struct PV {
   Vec3 p;
   Carrier c;  // of the edge from this corner to the next
 };
-using Poly = std::vector<PV>;
+// A clipped polygon in place (no allocation): a triangle cut by the planes of its cells has at most 9
+// corners; kCapacity leaves room, and an overflow is reported as a bad face like any inconsistency.
+struct Poly {
+  static constexpr int kCapacity = 16;
+  std::array<PV, kCapacity> v;
+  int n = 0;
+  Poly() = default;
+  Poly(const Poly& o) { *this = o; }
+  Poly& operator=(const Poly& o) {
+    n = o.n;
+    std::copy(o.v.begin(), o.v.begin() + n, v.begin());
+    return *this;
+  }
+  void swap(Poly& o) {
+    for (int i = 0, m = std::max(n, o.n); i < m; ++i) std::swap(v[std::size_t(i)], o.v[std::size_t(i)]);
+    std::swap(n, o.n);
+  }
+  void clear() { n = 0; }
+  bool empty() const { return n == 0; }
+  std::size_t size() const { return std::size_t(n); }
+  const PV& operator[](std::size_t i) const { return v[i]; }
+  const PV* begin() const { return v.data(); }
+  const PV* end() const { return v.data() + n; }
+  bool push_back(const PV& x) {
+    if (n == kCapacity) return false;
+    v[std::size_t(n++)] = x;
+    return true;
+  }
+};
+
+// The position of an edge point on the edge from pu to pv (the mesh edge's own vertex order) and of a face
+// point in the triangle A, B, C (SurfaceMesh::vertices order): the one canonical arithmetic, shared by the
+// clipper and point_position so that every caller gets bit-identical positions.
+Vec3 edge_point_at(const Vec3& pu, const Vec3& pv, int axis, double plane, double* t_out) {
+  double t = (plane - pu[axis]) / (pv[axis] - pu[axis]);
+  if (!std::isfinite(t)) t = 0.5;
+  t = std::clamp(t, 0.0, 1.0);
+  Vec3 x = pu + t * (pv - pu);
+  x[axis] = plane;
+  if (t_out) *t_out = t;
+  return x;
+}
+Vec3 face_point_at(const Vec3& A, const Vec3& B, const Vec3& C, const PointKey& key, std::array<double, 3>* w_out) {
+  const int line = key_axis(key);
+  const int ua = line == 0 ? 1 : 0, va = line == 2 ? 1 : 2;
+  const double qu = key_plane_u(key), qv = key_plane_v(key);
+  const double b1u = B[ua] - A[ua], b1v = B[va] - A[va], c1u = C[ua] - A[ua], c1v = C[va] - A[va];
+  const double du = qu - A[ua], dv = qv - A[va];
+  const double det = b1u * c1v - c1u * b1v;
+  double s = 1.0 / 3, r = 1.0 / 3;
+  if (std::abs(det) > 1e-300) {
+    s = (du * c1v - c1u * dv) / det;
+    r = (b1u * dv - du * b1v) / det;
+  }
+  if (!std::isfinite(s) || !std::isfinite(r)) s = r = 1.0 / 3;
+  std::array<double, 3> w{1.0 - s - r, s, r};
+  double sum = 0;
+  for (double& x : w) sum += (x = std::max(0.0, x));
+  for (double& x : w) x = sum > 0 ? x / sum : 1.0 / 3;
+  Vec3 x = w[0] * A + w[1] * B + w[2] * C;
+  x[ua] = qu;
+  x[va] = qv;
+  if (w_out) *w_out = w;
+  return x;
+}
 
 struct Clipper {
   const SurfaceMesh& mesh;
   const std::vector<Vec3>& P;
   Index face;
+  std::array<Index, 3> fv;  // the face's vertices, SurfaceMesh::vertices order
   bool bad = false;
 
   PV crossing(const Carrier& c, int axis, int plane) const {
     PV x;
-    if (c.axis < 0) x.key = edge_point_key(Index(c.value), axis, plane);
-    else {
+    if (c.axis < 0) {
+      const Edge e{Index(c.value)};
+      x.key = edge_point_key(e.idx, axis, plane);
+      x.p = edge_point_at(P[mesh.vertex(e, 0).idx], P[mesh.vertex(e, 1).idx], axis, plane, nullptr);
+    } else {
       const int line = 3 - c.axis - axis;
       const int a0 = std::min(c.axis, axis);
       const int pu = a0 == c.axis ? c.value : plane, pv = a0 == c.axis ? plane : c.value;
       x.key = face_point_key(face, line, pu, pv);
+      x.p = face_point_at(P[fv[0]], P[fv[1]], P[fv[2]], x.key, nullptr);
     }
-    x.p = point_position(mesh, P, x.key);
     return x;
   }
+  void push(Poly& poly, const PV& x) { bad = !poly.push_back(x) || bad; }
 
   // Split `in` by the plane into the part below (coordinate < plane) and the part above.
   void split(const Poly& in, int axis, int plane, Poly& below, Poly& above) {
@@ -65,14 +134,14 @@ struct Clipper {
       const PV& a = in[i];
       const PV& b = in[(i + 1) % n];
       const bool sa = a.p[axis] >= plane, sb = b.p[axis] >= plane;
-      (sa ? above : below).push_back(a);
+      push(sa ? above : below, a);
       if (sa != sb) {
         PV x = crossing(a.c, axis, plane);
         PV xa = x, xb = x;
         xa.c = Carrier{axis, plane};  // on a's side the cut runs along the plane to the other crossing
         xb.c = a.c;                   // on b's side the rest of a's edge follows
-        (sa ? above : below).push_back(xa);
-        (sb ? above : below).push_back(xb);
+        push(sa ? above : below, xa);
+        push(sb ? above : below, xb);
       }
     }
   }
@@ -87,10 +156,10 @@ struct ClipScratch {
 
 struct Chunk {
   ClipScratch scratch;
-  std::vector<Piece> pieces;
+  HugeVector<Piece> pieces;
   std::vector<std::uint32_t> face_count;  // pieces per face of the chunk
-  std::vector<PointKey> keys;
-  std::vector<std::uint8_t> tags;
+  HugeVector<PointKey> keys;
+  HugeVector<std::uint8_t> tags;
   std::vector<Index> bad_faces;
   std::vector<std::array<openvdb::Coord, 2>> bad_boxes;
 };
@@ -112,12 +181,13 @@ void emit(Chunk& out, Index f, const openvdb::Coord& cell, const Poly& poly) {
 }
 
 // Clip one face into its cell pieces, axis by axis, planes in increasing order.
-void clip_face(const SurfaceMesh& mesh, const std::vector<Vec3>& P, Index f, Chunk& out) {
+void clip_face(const SurfaceMesh& mesh, const std::vector<Vec3>& P, Index f, Chunk& out, std::array<Index, 3>& fv) {
   Poly& tri = out.scratch.tri;
   tri.clear();
   Halfedge h = mesh.halfedge(Face(f));
   for (int i = 0; i < 3; ++i, h = mesh.next(h)) {
     const Vertex v = mesh.from_vertex(h);
+    fv[std::size_t(i)] = v.idx;
     tri.push_back(PV{vertex_key(v.idx), P[v.idx], Carrier{-1, int(SurfaceMesh::edge(h).idx)}});
   }
   std::array<int, 3> lo, hi;
@@ -134,7 +204,7 @@ void clip_face(const SurfaceMesh& mesh, const std::vector<Vec3>& P, Index f, Chu
     out.face_count.push_back(1);
     return;
   }
-  Clipper clip{mesh, P, f};
+  Clipper clip{mesh, P, f, fv};
   ClipScratch& S = out.scratch;
   Poly &below = S.below, &above = S.above, &rest = S.rest;
   std::size_t nx = 0;
@@ -221,50 +291,28 @@ Vec3 point_position(const SurfaceMesh& mesh, const std::vector<Vec3>& P, const P
     }
     case PointKind::EdgePoint: {
       const Edge e(key_element(key));
-      const int axis = key_axis(key);
-      const double plane = key_plane(key);
       const Vertex u = mesh.vertex(e, 0), v = mesh.vertex(e, 1);
-      const Vec3& pu = P[u.idx];
-      const Vec3& pv = P[v.idx];
-      double t = (plane - pu[axis]) / (pv[axis] - pu[axis]);
-      if (!std::isfinite(t)) t = 0.5;
-      t = std::clamp(t, 0.0, 1.0);
-      Vec3 x = pu + t * (pv - pu);
-      x[axis] = plane;
+      double t = 0;
+      const Vec3 x = edge_point_at(P[u.idx], P[v.idx], key_axis(key), key_plane(key), &t);
       if (wts) *wts = PointWeights{2, {u, v}, {1.0 - t, t}};
       return x;
     }
     case PointKind::FacePoint: {
-      const Face f(key_element(key));
-      const int line = key_axis(key);
-      const int ua = line == 0 ? 1 : 0, va = line == 2 ? 1 : 2;
-      const double qu = key_plane_u(key), qv = key_plane_v(key);
-      const auto vs = mesh.vertices(f);
-      const Vec3& A = P[vs[0].idx];
-      const Vec3& B = P[vs[1].idx];
-      const Vec3& C = P[vs[2].idx];
-      const double b1u = B[ua] - A[ua], b1v = B[va] - A[va], c1u = C[ua] - A[ua], c1v = C[va] - A[va];
-      const double du = qu - A[ua], dv = qv - A[va];
-      const double det = b1u * c1v - c1u * b1v;
-      double s = 1.0 / 3, r = 1.0 / 3;
-      if (std::abs(det) > 1e-300) {
-        s = (du * c1v - c1u * dv) / det;
-        r = (b1u * dv - du * b1v) / det;
-      }
-      if (!std::isfinite(s) || !std::isfinite(r)) s = r = 1.0 / 3;
-      std::array<double, 3> w{1.0 - s - r, s, r};
-      double sum = 0;
-      for (double& x : w) sum += (x = std::max(0.0, x));
-      for (double& x : w) x = sum > 0 ? x / sum : 1.0 / 3;
-      Vec3 x = w[0] * A + w[1] * B + w[2] * C;
-      x[ua] = qu;
-      x[va] = qv;
+      const auto vs = mesh.vertices(Face(key_element(key)));
+      std::array<double, 3> w{};
+      const Vec3 x = face_point_at(P[vs[0].idx], P[vs[1].idx], P[vs[2].idx], key, &w);
       if (wts) *wts = PointWeights{3, vs, w};
       return x;
     }
     default:
       TT_THROW(Error, "point_position: not a mesh subdivision point");
   }
+}
+
+Vec3 point_position(const SurfaceMesh& mesh, const LatticeCut& cut, const PointKey& key) {
+  if (kind(key) != PointKind::FacePoint) return point_position(mesh, cut.P, key);
+  const auto& fv = cut.face_vertices[key_element(key)];
+  return face_point_at(cut.P[fv[0]], cut.P[fv[1]], cut.P[fv[2]], key, nullptr);
 }
 
 Vec3 cut_to_world(const openvdb::math::Transform& xform, const Vec3& p) {
@@ -306,7 +354,9 @@ LatticeCut cut_by_lattice(const SurfaceMesh& mesh, const openvdb::math::Transfor
       TT_THROW(InvalidInput, "constrain topology: vertex " << i << " lies beyond " << (kCellRange - 4)
                                                            << " voxels from the grid origin");
   }
-  constexpr std::size_t kChunk = 2048;
+  cut.face_vertices.resize(nf);
+  // Chunks of a fixed size for a given mesh (deterministic), big enough for huge-page buffers.
+  const std::size_t kChunk = std::max<std::size_t>(2048, (nf + 23) / 24);
   const std::size_t n_chunks = (nf + kChunk - 1) / kChunk;
   std::vector<Chunk> chunks(n_chunks);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n_chunks), [&](const tbb::blocked_range<std::size_t>& r) {
@@ -319,7 +369,7 @@ LatticeCut cut_by_lattice(const SurfaceMesh& mesh, const openvdb::math::Transfor
       out.tags.reserve(20 * (end - c * kChunk));
       for (std::size_t f = c * kChunk; f < end; ++f) {
         if (mesh.is_deleted(Face(Index(f)))) out.face_count.push_back(0);
-        else clip_face(mesh, cut.P, Index(f), out);
+        else clip_face(mesh, cut.P, Index(f), out, cut.face_vertices[f]);
       }
     }
   });
@@ -349,9 +399,9 @@ LatticeCut cut_by_lattice(const SurfaceMesh& mesh, const openvdb::math::Transfor
       std::uint32_t* fp = cut.face_pieces.data() + face_at[c] + 1;
       std::uint32_t acc = std::uint32_t(piece_at[c]);
       for (std::size_t i = 0; i < ch.face_count.size(); ++i) fp[i] = acc += ch.face_count[i];
-      std::vector<Piece>().swap(ch.pieces);  // free as we go
-      std::vector<PointKey>().swap(ch.keys);
-      std::vector<std::uint8_t>().swap(ch.tags);
+      HugeVector<Piece>().swap(ch.pieces);  // free as we go
+      HugeVector<PointKey>().swap(ch.keys);
+      HugeVector<std::uint8_t>().swap(ch.tags);
     }
   });
   for (Chunk& c : chunks) {
