@@ -61,6 +61,13 @@ std::vector<Binding> bindings(TrackerParams& p) {
       {"coarse.pcg_tolerance", &p.coarse_params.pcg_tolerance, 0, 1},
       {"coarse.max_pcg_iterations", &p.coarse_params.max_pcg_iterations, 1, 1e6},
       {"coarse.graph_density", &p.coarse_params.graph_density, 1e-3, 1e3},
+      // Large motion (our additions before §4.2's scheme, gated by the misfit; kernels/registration/coarse.hpp).
+      {"coarse.prealign_misfit", &p.coarse_params.prealign_misfit, 0, 1},
+      {"coarse.coarse_pass_misfit", &p.coarse_params.coarse_pass_misfit, 0, 1},
+      {"coarse.coarse_pass_density", &p.coarse_params.coarse_pass_density, 1e-3, 1},
+      {"coarse.coarse_pass_alpha_reg_min", &p.coarse_params.coarse_pass_alpha_reg_min, 1e-12, inf},
+      {"coarse.max_iterations_per_level_after_pass", &p.coarse_params.max_iterations_per_level_after_pass, 1, 1e6},
+      {"coarse.closest_point_levels", &p.coarse_params.closest_point_levels, 0, 16},
       {"fine.sigma", &p.fine_params.sigma, 0, inf},
       {"fine.max_normal_angle_deg", &p.fine_params.max_normal_angle_deg, 0, 180},
       {"fine.fit_weight", &p.fine_params.fit_weight, 0, inf},

@@ -123,7 +123,9 @@ struct Tracker::Impl {
       } else {
         if (params.coarse) {  // line 5
           const auto t0 = Clock::now();
-          report.coarse_iterations = align_coarse(mesh, surface, params.coarse_params).iterations;
+          const CoarseReport coarse = align_coarse(mesh, surface, params.coarse_params);
+          report.coarse_iterations = coarse.iterations;
+          report.coarse_pass_iterations = coarse.coarse_pass_iterations;
           report.seconds.coarse += since(t0);
         }
         if (params.fine) {  // line 6

@@ -22,7 +22,7 @@ namespace {
 
 struct AlignOptions {
   std::string source, target, output;
-  bool coarse_only = false, fine_only = false, projection_only = false, json = false;
+  bool coarse_only = false, fine_only = false, projection_only = false, json = false, no_large_motion = false;
   std::optional<double> graph_density, sigma;  // over the profile's when given
   std::string profile = "default";
   std::vector<std::string> settings;
@@ -34,6 +34,10 @@ TrackerParams align_params(const AlignOptions& opt) {
   for (const auto& s : opt.settings) apply_setting(params, s);
   if (opt.graph_density) params.coarse_params.graph_density = *opt.graph_density;
   if (opt.sigma) params.fine_params.sigma = *opt.sigma;
+  if (opt.no_large_motion) {
+    params.coarse_params.prealign_misfit = 0;
+    params.coarse_params.coarse_pass_misfit = 0;
+  }
   validate(params);
   return params;
 }
@@ -86,8 +90,15 @@ nlohmann::json run_coarse(SurfaceMesh& mesh, const TargetSurface& target, const 
                      {"mean_fit_distance", r.mean_fit_distance},
                      {"energy_start", r.energy_start},
                      {"energy_end", r.energy_end},
+                     {"misfit_start", r.misfit_start},
+                     {"coarse_pass_iterations", r.coarse_pass_iterations},
+                     {"prealign", {{"applied", r.prealigned},
+                                   {"iterations", r.prealign.iterations},
+                                   {"distance_start", r.prealign.distance_start},
+                                   {"distance_end", r.prealign.distance_end}}},
                      {"rounds", rounds}},
-                    {{"graph", r.seconds_graph},
+                    {{"prealign", r.seconds_prealign},
+                     {"graph", r.seconds_graph},
                      {"correspondences", r.seconds_correspondences},
                      {"assembly", r.seconds_assembly},
                      {"factorisation", r.seconds_factorisation},
@@ -138,8 +149,10 @@ void run_align(const AlignOptions& opt) {
   std::printf("%s -> %s: %s, %zu vertices", opt.source.c_str(), opt.output.c_str(),
               j["mode"].get<std::string>().c_str(), mesh.n_vertices());
   if (j.contains("coarse"))
-    std::printf("; coarse %d nodes, %d rounds, %.3f s", j["coarse"]["nodes"].get<int>(),
-                j["coarse"]["iterations"].get<int>(), j["coarse"]["seconds"]["total"].get<double>());
+    std::printf("; coarse %d nodes, %d rounds%s, %.3f s", j["coarse"]["nodes"].get<int>(),
+                j["coarse"]["iterations"].get<int>(),
+                j["coarse"]["prealign"]["applied"].get<bool>() ? " after a rigid pre-alignment" : "",
+                j["coarse"]["seconds"]["total"].get<double>());
   if (j.contains("fine"))
     std::printf("; fine %zu matched, %zu pruned, %.3f s", j["fine"]["correspondences"].get<std::size_t>(),
                 j["fine"]["pruned"].get<std::size_t>(), j["fine"]["seconds"]["total"].get<double>());
@@ -160,6 +173,8 @@ void add_align_command(CLI::App& app) {
   sub->add_option("--graph-density", opt->graph_density,
                   "deformation-graph node density relative to the paper's (1, 0.5, 0.25: fast preview)")
       ->check(CLI::Range(1e-3, 1.0));
+  sub->add_flag("--no-large-motion", opt->no_large_motion,
+                "the paper's coarse scheme alone: no rigid pre-alignment, no low-density first pass");
   sub->add_option("--sigma", opt->sigma, "fine-stage pruning distance, fraction of the bbox diagonal")
       ->check(CLI::PositiveNumber);
   sub->add_option("--profile", opt->profile, "bundled profile name or a .json file (default: the paper's values)");

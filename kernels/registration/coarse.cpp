@@ -386,12 +386,38 @@ CoarseReport align_coarse(SurfaceMesh& mesh, const TargetSurface& target, const 
   if (!(params.node_spacing_factor > 0) || !(params.graph_density > 0) || params.graph_density > 1 ||
       !(params.alpha_reg_start > 0) || !(params.alpha_reg_min > 0) || !(params.alpha_fit >= 0) ||
       !(params.alpha_point >= 0) || !(params.alpha_plane >= 0) || params.max_iterations < 0 ||
-      params.max_iterations_per_level < 1 || !(params.damping > 0) || !(params.step_tolerance >= 0) ||
-      !(params.fit_tolerance >= 0) || !(params.stall_ratio >= 0))
+      params.max_iterations_per_level < 1 || params.max_iterations_per_level_after_pass < 1 ||
+      !(params.damping > 0) || !(params.step_tolerance >= 0) || !(params.fit_tolerance >= 0) ||
+      !(params.stall_ratio >= 0) || !(params.prealign_misfit >= 0) || params.closest_point_levels < 0 ||
+      !(params.coarse_pass_misfit >= 0) || !(params.coarse_pass_density > 0) || params.coarse_pass_density > 1 ||
+      !(params.coarse_pass_alpha_reg_min > 0))
     TT_THROW(InvalidInput, "align_coarse: invalid parameters");
+  if (params.prealign_misfit > 0 || params.coarse_pass_misfit > 0) validate(params.prealign);
   if (mesh.n_vertices() == 0 || mesh.n_faces() == 0) TT_THROW(InvalidInput, "align_coarse: empty mesh");
 
-  // Relative units: the scene's bounding-box diagonal is 1 (§4.2).
+  if (const double d0 = bounding_box(mesh).diagonal(); !std::isfinite(d0))
+    TT_THROW(InvalidInput, "align_coarse: non-finite vertex positions");
+  auto t0 = Clock::now();
+  const double edge = mean_edge_length(mesh);
+  bool large_motion = false;
+  if (params.prealign_misfit > 0 || params.coarse_pass_misfit > 0) {
+    rep.misfit_start = trimmed_mean_distance(mesh, target, params.prealign) / target.bbox_diagonal();
+    large_motion = params.prealign_misfit > 0 && rep.misfit_start > params.prealign_misfit;
+    if (large_motion) {
+      rep.prealign = align_rigid(mesh, target, params.prealign);
+      rep.prealigned = rep.prealign.applied;
+    }
+    if (params.coarse_pass_misfit > 0 && rep.misfit_start > params.coarse_pass_misfit) {
+      CoarseParams pass = params;
+      pass.graph_density = params.graph_density * params.coarse_pass_density;
+      pass.alpha_reg_min = params.coarse_pass_alpha_reg_min;
+      pass.prealign_misfit = 0;
+      pass.coarse_pass_misfit = 0;
+      rep.coarse_pass_iterations = align_coarse(mesh, target, pass).iterations;
+    }
+  }
+  rep.seconds_prealign = seconds_since(t0);
+  // Relative units: the scene's bounding-box diagonal is 1 (§4.2), after the pre-alignment.
   BoundingBox scene = bounding_box(mesh);
   scene.extend(target.bounds().min);
   scene.extend(target.bounds().max);
@@ -399,8 +425,7 @@ CoarseReport align_coarse(SurfaceMesh& mesh, const TargetSurface& target, const 
   if (!(D > 0) || !std::isfinite(D)) TT_THROW(InvalidInput, "align_coarse: degenerate or non-finite scene");
   const double inv_d2 = 1.0 / (D * D);
 
-  auto t0 = Clock::now();
-  const double edge = mean_edge_length(mesh);
+  t0 = Clock::now();
   const double spacing = params.node_spacing_factor * edge / std::sqrt(params.graph_density);
   const DeformationGraph graph = build_deformation_graph(mesh, spacing, params.k);
   const std::vector<Vec3> rest = mesh.positions();
@@ -432,6 +457,8 @@ CoarseReport align_coarse(SurfaceMesh& mesh, const TargetSurface& target, const 
   Eigen::VectorXd grad;
   double alpha_reg = params.alpha_reg_start;
   int level_iterations = 0;
+  const int per_level =
+      rep.coarse_pass_iterations > 0 ? params.max_iterations_per_level_after_pass : params.max_iterations_per_level;
   rep.levels = 1;
   bool first = true;
   for (int it = 0; it < params.max_iterations; ++it) {
@@ -444,6 +471,7 @@ CoarseReport align_coarse(SurfaceMesh& mesh, const TargetSurface& target, const 
         node_n[j] = skinned_normal(problem, state, graph.node_vertex[j], ring);
       }
     });
+    cparams.closest_point = large_motion && rep.levels <= params.closest_point_levels;
     corr = find_correspondences(target, node_x, node_n, cparams);
     rep.seconds_correspondences += seconds_since(t0);
     const CorrespondenceCounts counts = count_correspondences(corr);
@@ -532,7 +560,7 @@ CoarseReport align_coarse(SurfaceMesh& mesh, const TargetSurface& target, const 
     const bool converged = !accepted ||
                            before.total - after.total <= params.convergence_tolerance * before.total ||
                            motion <= params.step_tolerance * edge || motion < params.stall_ratio * fit_distance;
-    if (converged || level_iterations >= params.max_iterations_per_level) {
+    if (converged || level_iterations >= per_level) {
       if (converged && fit_distance <= params.fit_tolerance * edge) break;
       alpha_reg /= 10;
       level_iterations = 0;

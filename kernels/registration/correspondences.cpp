@@ -14,7 +14,8 @@ Correspondence find_correspondence(const TargetSurface& target, const Vec3& x, c
   const double len = n.norm();
   if (!(len > 0) || !std::isfinite(len)) return out;
   const Vec3 dir = n / len;
-  const TargetSurface::Hit hit = target.cast_undirected(x, dir, params.max_distance);
+  const TargetSurface::Hit hit = params.closest_point ? target.closest_point(x, params.max_distance)
+                                                      : target.cast_undirected(x, dir, params.max_distance);
   if (!hit.hit) return out;
   out.point = hit.point;
   out.normal = hit.normal;
@@ -26,7 +27,7 @@ Correspondence find_correspondence(const TargetSurface& target, const Vec3& x, c
       return out;
     }
   }
-  if (std::isfinite(params.max_closest_ratio)) {
+  if (!params.closest_point && std::isfinite(params.max_closest_ratio)) {
     // The closest point is at most hit.distance away, which bounds the query.
     const TargetSurface::Hit closest = target.closest_point(x, hit.distance);
     const double closest_distance = closest.hit ? closest.distance : hit.distance;

@@ -23,6 +23,10 @@ struct CorrespondenceParams {
   double max_normal_angle_deg = 60;  //!< §4.2 coarse stage; >= 180 disables the test
   double max_closest_ratio = 3;      //!< §4.2 coarse stage; infinity disables the test (and the closest-point query)
   double max_distance = std::numeric_limits<double>::infinity();  //!< ray length either way (fine stage: sigma)
+  //! Match x to its closest point on S_n instead of casting along the normal (the ICP-style search of
+  //! Li et al. 2009; our option for large motion, where a normal ray often lands on the wrong part).
+  //! The normal-angle test still applies; the closest-point ratio test is moot.
+  bool closest_point = false;
 };
 
 struct Correspondence {

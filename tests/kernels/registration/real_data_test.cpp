@@ -2,6 +2,8 @@
 // frame k + 15 (large motion), the targets of the registration issue.
 #include <gtest/gtest.h>
 
+#include <Eigen/SVD>
+#include <algorithm>
 #include <cstdio>
 #include <cstdlib>
 #include <string>
@@ -19,7 +21,8 @@ struct Figures {
 };
 
 // Environment knobs for comparisons: TOPOTRACK_TEST_CHOLESKY=eigen, TOPOTRACK_TEST_DIRECT=1, and
-// TOPOTRACK_TEST_<NAME>=value for the CoarseParams below (MAX_PCG: max_pcg_iterations).
+// TOPOTRACK_TEST_<NAME>=value for the CoarseParams below (MAX_PCG: max_pcg_iterations), TOPOTRACK_TEST_HISTORY=1
+// (per-round figures), TOPOTRACK_TEST_RIGID_TRUTH=1 (the error of the best rigid motion: pcow 9.5%, elephant 6.0%).
 void env_double(const char* name, double& value) {
   if (const char* e = std::getenv(name)) value = std::atof(e);
 }
@@ -27,13 +30,28 @@ void env_int(const char* name, int& value) {
   if (const char* e = std::getenv(name)) value = std::atoi(e);
 }
 
-int last_rounds = 0;  // rounds of the last run_pair
+int last_rounds = 0;       // rounds of the last run_pair
+CoarseReport last_coarse;  // its coarse report
 
 Figures run_pair(const std::string& name, int frame, int gap) {
   test::AlignmentPair pair = test::make_pair(name, frame, gap);
   const TargetSurface target = TargetSurface::from_mesh(pair.target_mesh);
   Figures f;
   f.unaligned = test::alignment_error(pair.source, pair.truth, target, pair.diagonal);
+  if (std::getenv("TOPOTRACK_TEST_RIGID_TRUTH")) {  // the best rigid fit to the ground truth, for reference
+    Vec3 px = Vec3::Zero(), pc = Vec3::Zero();
+    const auto& P = pair.source.positions();
+    for (std::size_t i = 0; i < P.size(); ++i) { px += P[i]; pc += pair.truth[i]; }
+    px /= double(P.size()); pc /= double(P.size());
+    Eigen::Matrix3d H = Eigen::Matrix3d::Zero();
+    for (std::size_t i = 0; i < P.size(); ++i) H += (P[i] - px) * (pair.truth[i] - pc).transpose();
+    Eigen::JacobiSVD<Eigen::Matrix3d> svd(H, Eigen::ComputeFullU | Eigen::ComputeFullV);
+    Eigen::Matrix3d R = svd.matrixV() * svd.matrixU().transpose();
+    double e = 0;
+    for (std::size_t i = 0; i < P.size(); ++i) e += (R * (P[i] - px) + pc - pair.truth[i]).norm();
+    std::printf("  best rigid: error %.4f %%, angle %.1f deg, shift %.4f diag\n", 100 * e / double(P.size()) / pair.diagonal,
+                std::acos(std::clamp((R.trace() - 1) / 2, -1.0, 1.0)) * 180 / 3.14159, (pc - px).norm() / pair.diagonal);
+  }
   SurfaceMesh projected = pair.source.clone();
   project_to_closest(projected, target);
   f.projected = test::alignment_error(projected, pair.truth, target, pair.diagonal);
@@ -54,7 +72,20 @@ Figures run_pair(const std::string& name, int frame, int gap) {
   env_int("TOPOTRACK_TEST_MAX_ITERATIONS", params.max_iterations);
   env_int("TOPOTRACK_TEST_MAX_PER_LEVEL", params.max_iterations_per_level);
   env_int("TOPOTRACK_TEST_MAX_PCG", params.max_pcg_iterations);
+  env_double("TOPOTRACK_TEST_PREALIGN_MISFIT", params.prealign_misfit);
+  env_double("TOPOTRACK_TEST_PREALIGN_TRIM", params.prealign.trim_fraction);
+  env_int("TOPOTRACK_TEST_CLOSEST_LEVELS", params.closest_point_levels);
+  env_double("TOPOTRACK_TEST_PASS_DENSITY", params.coarse_pass_density);
+  env_double("TOPOTRACK_TEST_PASS_MISFIT", params.coarse_pass_misfit);
+  env_int("TOPOTRACK_TEST_PER_LEVEL_AFTER_PASS", params.max_iterations_per_level_after_pass);
+  env_double("TOPOTRACK_TEST_PASS_ALPHA_MIN", params.coarse_pass_alpha_reg_min);
+  env_double("TOPOTRACK_TEST_PREALIGN_TOLERANCE", params.prealign.tolerance);
+  env_int("TOPOTRACK_TEST_PREALIGN_ITERATIONS", params.prealign.max_iterations);
+  if (const char* e = std::getenv("TOPOTRACK_TEST_PREALIGN_SAMPLES")) params.prealign.max_samples = std::size_t(std::atoi(e));
   const CoarseReport c = align_coarse(mesh, target, params);
+  std::printf("  misfit %.4f of the diagonal, low-density pass %d rounds, prealigned %d (%d ICP steps, %.4f -> %.4f, %.3f s)\n", c.misfit_start, c.coarse_pass_iterations,
+              int(c.prealigned), c.prealign.iterations, c.prealign.distance_start / pair.diagonal,
+              c.prealign.distance_end / pair.diagonal, c.seconds_prealign);
   const FineReport fr = align_fine(mesh, target);
   f.aligned = test::alignment_error(mesh, pair.truth, target, pair.diagonal);
   std::printf("  coarse phases: graph %.3f correspondences %.3f assembly %.3f factorisation %.3f solve %.3f; "
@@ -69,18 +100,20 @@ Figures run_pair(const std::string& name, int frame, int gap) {
               100 * f.unaligned.mean_truth, 100 * f.projected.mean_truth, 100 * f.aligned.mean_truth,
               100 * f.projected.mean_target, 100 * f.aligned.mean_target, c.seconds_total, fr.seconds_total);
   if (std::getenv("TOPOTRACK_TEST_HISTORY")) {
-    std::printf("  energy per round:");
-    for (double e : c.energy_history) std::printf(" %.3g", e);
+    std::printf("  rounds (alpha_reg, fit distance in edges, correspondences, motion):");
+    for (const CoarseRound& r : c.rounds) std::printf(" [%g %.2f %zu %.2f]", r.alpha_reg, r.fit_distance, r.correspondences, r.motion);
     std::printf("\n  mean node fit distance %.4f mean edge lengths\n", c.mean_fit_distance / mean_edge_length(pair.source));
   }
   last_rounds = c.iterations;
+  last_coarse = c;
   return f;
 }
 
 // The issue's targets are 0.35% of the diagonal and a fifth of the unaligned error for the ground-truth
 // error, 0.1% for the distance to the target. Measured (see the printed figures) they are met only
-// where the motion stays within the capture range of normal-ray correspondences (samba); these
-// assertions guard what the implementation achieves.
+// where the motion stays within the capture range of the correspondences (samba); where it does not
+// (pcow: the best rigid motion alone leaves 9.5%, elephant: 6.0%), the rigid pre-alignment and the
+// low-density pass lower the error; these assertions guard what the implementation achieves.
 void expect_improvement(const Figures& f, double max_ratio_to_unaligned) {
   EXPECT_LE(f.aligned.mean_truth, max_ratio_to_unaligned * f.unaligned.mean_truth);
   EXPECT_GT(f.projected.mean_truth, f.aligned.mean_truth);
@@ -93,14 +126,18 @@ TEST(RealData, SambaLargeMotion) {
   TOPOTRACK_REQUIRE_DATA("samba");
   const Figures f = run_pair("samba", 1, 15);
   expect_improvement(f, 0.35);
-  EXPECT_LE(f.aligned.mean_truth, 0.0035);
+  EXPECT_LE(f.aligned.mean_truth, 0.0025);  // measured 0.152%
   EXPECT_LE(f.aligned.mean_target, 0.001);
 }
 TEST(RealData, PcowLargeMotion) {
   TOPOTRACK_REQUIRE_DATA("pcow");
-  // Measured 13.2-15.8% of 26.7% (the re-sampled target follows improve_mesh), 18.0% with
-  // TOPOTRACK_TEST_MAX_PCG=100 (the former PCG cap) on the same build.
-  expect_improvement(run_pair("pcow", 1, 15), 0.7);
+  // Measured 9.25-9.29% of 26.7% (misfit 5.1% of the diagonal: pre-aligned, then the low-density pass);
+  // 15.3% with the paper's scheme alone (TOPOTRACK_TEST_PREALIGN_MISFIT=0 TOPOTRACK_TEST_PASS_MISFIT=0).
+  const Figures f = run_pair("pcow", 1, 15);
+  expect_improvement(f, 0.42);
+  EXPECT_TRUE(last_coarse.prealigned);
+  EXPECT_GT(last_coarse.coarse_pass_iterations, 0);
+  EXPECT_LE(f.aligned.mean_target, 0.012);  // measured 0.51-0.79% (1.13% without the large-motion stages)
 }
 // The tracker's case: consecutive frames. The absolute convergence tests (step_tolerance,
 // fit_tolerance) end the alpha_reg schedule early once nothing is left to fit.
@@ -110,10 +147,18 @@ TEST(RealData, SambaConsecutiveFrames) {
   EXPECT_LE(f.aligned.mean_truth, f.unaligned.mean_truth);
   EXPECT_LE(f.aligned.mean_target, 0.001);
   EXPECT_LE(last_rounds, 6);  // measured 3 (12 with the full alpha_reg schedule)
+  EXPECT_EQ(last_coarse.coarse_pass_iterations, 0);  // misfit 0.02% of the diagonal: the paper's scheme
+  EXPECT_FALSE(last_coarse.prealigned);
 }
 TEST(RealData, ElephantLargeMotion) {
   TOPOTRACK_REQUIRE_DATA("elephant");
-  expect_improvement(run_pair("elephant", 1, 15), 0.95);
+  // Measured 4.15% of 6.25% (misfit 0.57%: the low-density pass, no pre-alignment); 5.09% with the
+  // paper's scheme alone, 3.97% with 8 rounds per level after the pass (slower).
+  const Figures f = run_pair("elephant", 1, 15);
+  expect_improvement(f, 0.75);
+  EXPECT_FALSE(last_coarse.prealigned);
+  EXPECT_GT(last_coarse.coarse_pass_iterations, 0);
+  EXPECT_LE(f.aligned.mean_target, 0.0025);  // measured 0.17% (0.30% without the pass)
 }
 
 }  // namespace

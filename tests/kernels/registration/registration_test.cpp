@@ -11,24 +11,25 @@
 #include "kernels/registration/deformation_graph.hpp"
 #include "kernels/registration/fine.hpp"
 #include "kernels/registration/projection.hpp"
+#include "tests/kernels/registration/blob.hpp"
 #include "tests/support/test_meshes.hpp"
 
 namespace topotrack {
 namespace {
 
-// An asymmetric closed shape (a bumpy ellipsoid) so that rotations are observable.
-test::Soup blob(int subdivisions = 4) {
-  test::Soup s = test::icosphere(subdivisions);
-  for (Vec3& p : s.positions) {
-    const double bump = 1 + 0.25 * std::exp(-8 * (p - Vec3(0.6, 0.6, 0.5).normalized()).squaredNorm()) +
-                        0.15 * std::exp(-10 * (p - Vec3(-0.7, 0.1, -0.7).normalized()).squaredNorm());
-    p = Vec3(1.0 * p.x(), 0.7 * p.y(), 0.5 * p.z()) * bump;
-  }
-  return s;
-}
+using test::blob;
 
 Eigen::Matrix3d rotation(double deg, const Vec3& axis) {
   return Eigen::AngleAxisd(deg * std::numbers::pi / 180, axis.normalized()).toRotationMatrix();
+}
+
+// The paper's scheme alone (§4.2): the large-motion stages (rigid pre-alignment, low-density pass)
+// off, for the tests of the Gauss–Newton rounds themselves.
+CoarseParams paper_scheme() {
+  CoarseParams p;
+  p.prealign_misfit = 0;
+  p.coarse_pass_misfit = 0;
+  return p;
 }
 
 double mean_error(const SurfaceMesh& m, const std::vector<Vec3>& truth) {
@@ -133,6 +134,26 @@ TEST(Correspondences, PruningRules) {
             CorrespondenceStatus::NoHit);
 }
 
+TEST(Correspondences, ClosestPointMode) {
+  const test::Soup s = test::icosphere(5);
+  const TargetSurface target(s.positions, s.triangles);
+  CorrespondenceParams closest;
+  closest.closest_point = true;
+  // The grazing ray that the ratio test prunes: the closest point is straight above, normals agree.
+  Correspondence c = find_correspondence(target, Vec3(0, 0.9, 0), Vec3(0.2, 1, 0), closest);
+  EXPECT_EQ(c.status, CorrespondenceStatus::Ok);
+  EXPECT_NEAR(c.distance, 0.1, 2e-3);
+  EXPECT_NEAR(c.point.y(), 1.0, 2e-3);
+  // The normal test still applies.
+  EXPECT_EQ(find_correspondence(target, Vec3(0, 0.9, 0), Vec3(1, 0, 0), closest).status,
+            CorrespondenceStatus::NormalAngle);
+  EXPECT_EQ(find_correspondence(target, Vec3(0, 0.9, 0), Vec3(0, -1, 0), closest).status,
+            CorrespondenceStatus::NormalAngle);
+  // Farther than max_distance: no match.
+  closest.max_distance = 0.05;
+  EXPECT_EQ(find_correspondence(target, Vec3(0, 0.9, 0), Vec3(0, 1, 0), closest).status, CorrespondenceStatus::NoHit);
+}
+
 // --- coarse + fine -------------------------------------------------------------------------------
 
 TEST(Alignment, RigidRotationIsRecovered) {
@@ -141,7 +162,8 @@ TEST(Alignment, RigidRotationIsRecovered) {
   Case c = make_case([&](const Vec3& p) { return Vec3(R * p + t); });
   const double diag = c.target.bbox_diagonal();
   const double before = mean_error(c.source, c.truth);
-  const CoarseReport cr = align_coarse(c.source, c.target);
+  Case with_pass = make_case([&](const Vec3& p) { return Vec3(R * p + t); });
+  const CoarseReport cr = align_coarse(c.source, c.target, paper_scheme());
   EXPECT_GT(cr.iterations, 1);
   EXPECT_LT(cr.fit_end, 0.05 * cr.fit_start);
   const double after_coarse = mean_error(c.source, c.truth);
@@ -151,6 +173,47 @@ TEST(Alignment, RigidRotationIsRecovered) {
   EXPECT_LT(after_coarse, 0.2 * before);
   EXPECT_LT(after, 0.005 * diag) << "before " << before / diag << " coarse " << after_coarse / diag;
   c.source.validate();
+  // The defaults: the misfit calls for the low-density pass first; the result is as good.
+  const CoarseReport dp = align_coarse(with_pass.source, with_pass.target);
+  EXPECT_GT(dp.coarse_pass_iterations, 1);
+  EXPECT_FALSE(dp.prealigned);
+  align_fine(with_pass.source, with_pass.target);
+  EXPECT_LT(mean_error(with_pass.source, with_pass.truth), 0.005 * diag);
+}
+
+// Far beyond the capture range of normal rays (a third of the shape's size and 70 degrees): the rigid
+// pre-alignment runs first, and without it the coarse stage stays far off.
+TEST(Alignment, LargeMotionIsPreAligned) {
+  const Eigen::Matrix3d R = rotation(70, Vec3(0.2, 1, 0.4));
+  const Vec3 t(0.6, -0.3, 0.2);
+  auto transform = [&](const Vec3& p) { return Vec3(R * p + t); };
+  Case with = make_case(transform), without = make_case(transform);
+  const double diag = with.target.bbox_diagonal();
+  const double before = mean_error(with.source, with.truth);
+  const CoarseReport cr = align_coarse(with.source, with.target);
+  EXPECT_GT(cr.misfit_start, CoarseParams{}.prealign_misfit);
+  EXPECT_TRUE(cr.prealigned);
+  EXPECT_LT(cr.prealign.distance_end, 0.1 * cr.prealign.distance_start);
+  align_fine(with.source, with.target);
+  CoarseParams off;
+  off.prealign_misfit = 0;
+  const CoarseReport co = align_coarse(without.source, without.target, off);
+  EXPECT_FALSE(co.prealigned);
+  align_fine(without.source, without.target);
+  const double after = mean_error(with.source, with.truth), after_off = mean_error(without.source, without.truth);
+  EXPECT_LT(after, 0.01 * diag) << "before " << before / diag;
+  EXPECT_GT(after_off, 5 * after);
+  with.source.validate();
+}
+
+// Small motion stays with the paper's scheme: the misfit is measured, nothing is pre-aligned.
+TEST(Alignment, SmallMotionIsNotPreAligned) {
+  Case c = make_case([](const Vec3& p) { return Vec3(rotation(5, Vec3(0, 0, 1)) * p + Vec3(0.03, 0, 0)); });
+  const CoarseReport cr = align_coarse(c.source, c.target);
+  EXPECT_GT(cr.misfit_start, 0);
+  EXPECT_LT(cr.misfit_start, CoarseParams{}.prealign_misfit);
+  EXPECT_FALSE(cr.prealigned);
+  EXPECT_EQ(cr.prealign.iterations, 0);
 }
 
 TEST(Alignment, AffineStretchIsRecovered) {
@@ -184,7 +247,7 @@ TEST(Alignment, EnergiesDecrease) {
 // lowering the energy of its correspondences, and the PCG cap (an inexact Newton step) respected.
 TEST(Alignment, RoundsAreReported) {
   Case c = make_case([](const Vec3& p) { return Vec3(rotation(20, Vec3(0, 0, 1)) * p + Vec3(0.05, 0, 0)); });
-  CoarseParams p;
+  CoarseParams p = paper_scheme();
   p.max_pcg_iterations = 4;
   const double edge = mean_edge_length(c.source);  // the unit of motion and fit_distance
   const CoarseReport r = align_coarse(c.source, c.target, p);
@@ -288,6 +351,15 @@ TEST(Alignment, BadParametersThrow) {
   p = CoarseParams{};
   p.stall_ratio = -0.5;
   EXPECT_THROW(align_coarse(c.source, c.target, p), InvalidInput);
+  p = CoarseParams{};
+  p.prealign_misfit = -1;
+  EXPECT_THROW(align_coarse(c.source, c.target, p), InvalidInput);
+  p = CoarseParams{};
+  p.prealign.trim_fraction = 0;  // checked even when the misfit does not call for the pre-alignment
+  EXPECT_THROW(align_coarse(c.source, c.target, p), InvalidInput);
+  p = CoarseParams{};
+  p.closest_point_levels = -1;
+  EXPECT_THROW(align_coarse(c.source, c.target, p), InvalidInput);
   SurfaceMesh empty;
   EXPECT_THROW(align_coarse(empty, c.target), InvalidInput);
 }
@@ -309,7 +381,7 @@ TEST(Alignment, CholeskyBackendsAgree) {
 TEST(Alignment, SeparablePcgMatchesDirectSolve) {
   Case c1 = make_case([](const Vec3& p) { return Vec3(rotation(10, Vec3(0, 1, 1)) * p + Vec3(0.02, 0, 0)); });
   Case c2 = make_case([](const Vec3& p) { return Vec3(rotation(10, Vec3(0, 1, 1)) * p + Vec3(0.02, 0, 0)); });
-  CoarseParams p;
+  CoarseParams p = paper_scheme();
   p.linear_solver = CoarseLinearSolver::Direct;
   const CoarseReport a = align_coarse(c1.source, c1.target, p);
   p.linear_solver = CoarseLinearSolver::SeparablePCG;
@@ -330,9 +402,14 @@ TEST(Alignment, OneAndTwoThreadsGiveIdenticalResults) {
     arena.execute([&] {
       const Eigen::Matrix3d R = rotation(15, Vec3(1, 1, 0));
       Case c = make_case([&](const Vec3& p) { return Vec3(R * p * 1.1); });
-      align_coarse(c.source, c.target);
+      EXPECT_GT(align_coarse(c.source, c.target).coarse_pass_iterations, 0);
       align_fine(c.source, c.target);
       out = c.source.positions();
+      // Large motion: rigid pre-alignment, low-density pass, full graph.
+      const Eigen::Matrix3d R2 = rotation(70, Vec3(0.2, 1, 0.4));
+      Case d = make_case([&](const Vec3& p) { return Vec3(R2 * p + Vec3(0.6, -0.3, 0.2)); });
+      EXPECT_TRUE(align_coarse(d.source, d.target).prealigned);
+      out.insert(out.end(), d.source.positions().begin(), d.source.positions().end());
     });
     return out;
   };
