@@ -4,6 +4,7 @@
 #include <benchmark/benchmark.h>
 
 #include <cmath>
+#include <cstring>
 #include <numbers>
 
 #include "kernels/gen/synthetic.hpp"
@@ -97,7 +98,21 @@ void BM_SignedDistanceMethod(benchmark::State& state) {
 void BM_NarrowBand(benchmark::State& state) {
   const Input in = bumpy_torus(state.range(0));
   NarrowBandReport r;
-  for (auto _ : state) benchmark::DoNotOptimize(narrow_band_signed_distance(in.positions, in.triangles, {in.edge, double(state.range(1)) / 10}, &r));
+  openvdb::FloatGrid::Ptr grid;
+  for (auto _ : state) {
+    grid = narrow_band_signed_distance(in.positions, in.triangles, {in.edge, double(state.range(1)) / 10}, &r);
+    benchmark::DoNotOptimize(grid);
+  }
+  // A checksum of the active values (bits and coordinates), so that a faster version can show it is unchanged.
+  std::uint64_t sum = 0;
+  for (auto it = grid->cbeginValueOn(); it; ++it) {
+    std::uint32_t bits = 0;
+    const float v = *it;
+    std::memcpy(&bits, &v, sizeof bits);
+    const openvdb::Coord c = it.getCoord();
+    sum = sum * 1000003u + (bits ^ std::uint64_t(std::uint32_t(c.x() * 73856093 ^ c.y() * 19349663 ^ c.z() * 83492791)) << 20);
+  }
+  state.counters["checksum"] = double(sum % (std::uint64_t(1) << 50));
   state.counters["vertices"] = double(in.positions.size());
   state.counters["active_voxels"] = double(r.active_voxels);
   state.counters["pairs"] = double(r.triangle_blocks);

@@ -122,15 +122,7 @@ openvdb::FloatGrid::Ptr narrow_band_signed_distance(std::span<const Vec3> positi
   ensure_openvdb_initialized();
   const double h = params.voxel_size, hw = params.half_width_voxels;
   auto xform = voxel_transform(h);
-  if (!std::isfinite(hw) || hw < 1.0)
-    TT_THROW(InvalidInput, "signed distance: half width must be at least 1 voxel, got " << hw);
-  for (std::size_t i = 0; i < positions.size(); ++i)
-    if (!positions[i].allFinite()) TT_THROW(InvalidInput, "signed distance: vertex " << i << " is not finite");
-  for (std::size_t f = 0; f < triangles.size(); ++f)
-    for (Index v : triangles[f])
-      if (v >= positions.size())
-        TT_THROW(InvalidInput, "signed distance: triangle " << f << " has vertex index " << v << " out of range ("
-                                                            << positions.size() << " vertices)");
+  check_signed_distance_input(positions, triangles, hw);
   const float background = float(hw * h);
   auto grid = openvdb::FloatGrid::create(background);
   grid->setTransform(xform);

@@ -50,21 +50,10 @@ openvdb::math::Transform::Ptr voxel_transform(double voxel_size) {
   }
 }
 
-openvdb::FloatGrid::Ptr signed_distance(std::span<const Vec3> positions,
-                                        std::span<const std::array<Index, 3>> triangles,
-                                        const SignedDistanceParams& params, SignedDistanceReport* report) {
-  using Clock = std::chrono::steady_clock;
-  ensure_openvdb_initialized();
-  const double voxel_size = params.voxel_size, half_width_voxels = params.half_width_voxels;
-  auto xform = voxel_transform(voxel_size);
+void check_signed_distance_input(std::span<const Vec3> positions, std::span<const std::array<Index, 3>> triangles,
+                                 double half_width_voxels) {
   if (!std::isfinite(half_width_voxels) || half_width_voxels < 1.0)
     TT_THROW(InvalidInput, "signed distance: half width must be at least 1 voxel, got " << half_width_voxels);
-  if (!std::isfinite(params.min_thickness_voxels) || params.min_thickness_voxels < 0 ||
-      (params.min_thickness_voxels > 0 && half_width_voxels < 0.5 * params.min_thickness_voxels + 1.5))
-    TT_THROW(InvalidInput, "signed distance: a minimum thickness of " << params.min_thickness_voxels
-                                                                      << " voxels needs a half width of at least "
-                                                                      << 0.5 * params.min_thickness_voxels + 1.5
-                                                                      << " voxels, got " << half_width_voxels);
   for (std::size_t i = 0; i < positions.size(); ++i)
     if (!positions[i].allFinite()) TT_THROW(InvalidInput, "signed distance: vertex " << i << " is not finite");
   for (std::size_t f = 0; f < triangles.size(); ++f)
@@ -72,6 +61,22 @@ openvdb::FloatGrid::Ptr signed_distance(std::span<const Vec3> positions,
       if (v >= positions.size())
         TT_THROW(InvalidInput, "signed distance: triangle " << f << " has vertex index " << v << " out of range ("
                                                             << positions.size() << " vertices)");
+}
+
+openvdb::FloatGrid::Ptr signed_distance(std::span<const Vec3> positions,
+                                        std::span<const std::array<Index, 3>> triangles,
+                                        const SignedDistanceParams& params, SignedDistanceReport* report) {
+  using Clock = std::chrono::steady_clock;
+  ensure_openvdb_initialized();
+  const double voxel_size = params.voxel_size, half_width_voxels = params.half_width_voxels;
+  auto xform = voxel_transform(voxel_size);
+  check_signed_distance_input(positions, triangles, half_width_voxels);
+  if (!std::isfinite(params.min_thickness_voxels) || params.min_thickness_voxels < 0 ||
+      (params.min_thickness_voxels > 0 && half_width_voxels < 0.5 * params.min_thickness_voxels + 1.5))
+    TT_THROW(InvalidInput, "signed distance: a minimum thickness of " << params.min_thickness_voxels
+                                                                      << " voxels needs a half width of at least "
+                                                                      << 0.5 * params.min_thickness_voxels + 1.5
+                                                                      << " voxels, got " << half_width_voxels);
   SignedDistanceReport rep;
   rep.method = params.method;
   if (rep.method == SdfMethod::kAuto)

@@ -24,6 +24,12 @@ void ensure_openvdb_initialized();
 //! \throw InvalidInput when voxel_size is not finite and positive.
 openvdb::math::Transform::Ptr voxel_transform(double voxel_size);
 
+//! The input check shared by every signed-distance entry point (signed_distance, narrow_band_signed_distance).
+//! \throw InvalidInput when half_width_voxels is below 1 or not finite, a coordinate is not finite or a
+//! triangle index is out of range (the voxel size is checked by voxel_transform).
+void check_signed_distance_input(std::span<const Vec3> positions, std::span<const std::array<Index, 3>> triangles,
+                                 double half_width_voxels);
+
 //! How the distance is computed; kAuto is the one place that picks.
 enum class SdfMethod {
   //! kNarrowBand for the tracker's closed meshes (sign_method kPseudonormal, no thickening, extent within

@@ -154,14 +154,37 @@ struct ClipScratch {
   std::vector<int> xc, yc;
 };
 
+// A chunk writes its corners straight into its own range of the cut's arrays (`key_cap` entries from
+// `keys` / `tags`), so that they need no copying afterwards; corners beyond that range go to `spill_*`, and
+// the cut then concatenates (never seen: the range allows 20 corners per face, about 18 are used).
 struct Chunk {
   ClipScratch scratch;
-  HugeVector<Piece> pieces;
+  HugeVector<Piece> pieces;  // Piece::begin relative to the chunk's first corner
   std::vector<std::uint32_t> face_count;  // pieces per face of the chunk
-  HugeVector<PointKey> keys;
-  HugeVector<std::uint8_t> tags;
+  PointKey* keys = nullptr;
+  std::uint8_t* tags = nullptr;
+  std::size_t key_cap = 0, n_keys = 0;
+  HugeVector<PointKey> spill_keys;
+  HugeVector<std::uint8_t> spill_tags;
   std::vector<Index> bad_faces;
   std::vector<std::array<openvdb::Coord, 2>> bad_boxes;
+
+  void push(const PointKey& k, std::uint8_t tag) {
+    if (n_keys < key_cap) {
+      keys[n_keys] = k;
+      tags[n_keys] = tag;
+    } else {
+      spill_keys.push_back(k);
+      spill_tags.push_back(tag);
+    }
+    ++n_keys;
+  }
+  void truncate(std::size_t n) {
+    n_keys = n;
+    const std::size_t spilled = n > key_cap ? n - key_cap : 0;
+    spill_keys.resize(spilled);
+    spill_tags.resize(spilled);
+  }
 };
 
 int cell_of(double x) { return int(std::floor(x)); }
@@ -170,13 +193,10 @@ void emit(Chunk& out, Index f, const openvdb::Coord& cell, const Poly& poly) {
   Piece pc;
   pc.cell = cell_key(cell);
   pc.face = f;
-  pc.begin = std::uint32_t(out.keys.size());
+  pc.begin = std::uint32_t(out.n_keys);
   pc.size = std::uint8_t(poly.size());
-  for (const PV& v : poly) {
-    out.keys.push_back(v.key);
-    if (v.c.axis < 0) out.tags.push_back(kOnMeshEdge);
-    else out.tags.push_back(std::uint8_t(2 * v.c.axis + (v.c.value - cell[v.c.axis])));
-  }
+  for (const PV& v : poly)
+    out.push(v.key, v.c.axis < 0 ? kOnMeshEdge : std::uint8_t(2 * v.c.axis + (v.c.value - cell[v.c.axis])));
   out.pieces.push_back(pc);
 }
 
@@ -198,7 +218,7 @@ void clip_face(const SurfaceMesh& mesh, const std::vector<Vec3>& P, Index f, Chu
       hi[a] = std::max(hi[a], cell_of(tri[i].p[a]));
     }
   }
-  const std::size_t first_piece = out.pieces.size(), first_key = out.keys.size();
+  const std::size_t first_piece = out.pieces.size(), first_key = out.n_keys;
   if (lo == hi) {
     emit(out, f, openvdb::Coord(lo[0], lo[1], lo[2]), tri);
     out.face_count.push_back(1);
@@ -250,8 +270,7 @@ void clip_face(const SurfaceMesh& mesh, const std::vector<Vec3>& P, Index f, Chu
   }
   if (clip.bad) {
     out.pieces.resize(first_piece);
-    out.keys.resize(first_key);
-    out.tags.resize(first_key);
+    out.truncate(first_key);
     out.bad_faces.push_back(f);
     out.bad_boxes.push_back({openvdb::Coord(lo[0], lo[1], lo[2]), openvdb::Coord(hi[0], hi[1], hi[2])});
   }
@@ -359,30 +378,53 @@ LatticeCut cut_by_lattice(const SurfaceMesh& mesh, const openvdb::math::Transfor
   const std::size_t kChunk = std::max<std::size_t>(2048, (nf + 23) / 24);
   const std::size_t n_chunks = (nf + kChunk - 1) / kChunk;
   std::vector<Chunk> chunks(n_chunks);
+  // About 4 pieces of 4-5 corners per face when the voxel is the edge length (measured on metaballs).
+  constexpr std::size_t kKeysPerFace = 20;
+  std::vector<std::size_t> key_base(n_chunks + 1, 0);
+  for (std::size_t c = 0; c < n_chunks; ++c)
+    key_base[c + 1] = key_base[c] + kKeysPerFace * (std::min(nf, (c + 1) * kChunk) - c * kChunk);
+  const bool in_place = key_base[n_chunks] <= std::size_t(UINT32_MAX);
+  if (in_place) {
+    cut.keys.resize(key_base[n_chunks]);  // left unwritten (HugePageAllocator): the chunks fill their ranges
+    cut.tags.resize(key_base[n_chunks]);
+  }
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n_chunks), [&](const tbb::blocked_range<std::size_t>& r) {
     for (std::size_t c = r.begin(); c != r.end(); ++c) {
       Chunk& out = chunks[c];
       const std::size_t end = std::min(nf, (c + 1) * kChunk);
-      // About 4 pieces of 4-5 corners per face when the voxel is the edge length (measured on metaballs).
       out.pieces.reserve(5 * (end - c * kChunk));
-      out.keys.reserve(20 * (end - c * kChunk));
-      out.tags.reserve(20 * (end - c * kChunk));
+      if (in_place) {
+        out.keys = cut.keys.data() + key_base[c];
+        out.tags = cut.tags.data() + key_base[c];
+        out.key_cap = key_base[c + 1] - key_base[c];
+      }
       for (std::size_t f = c * kChunk; f < end; ++f) {
         if (mesh.is_deleted(Face(Index(f)))) out.face_count.push_back(0);
         else clip_face(mesh, cut.P, Index(f), out, cut.face_vertices[f]);
       }
     }
   });
-  // Concatenate the chunks in order, in parallel (each chunk copies into its own range).
+  // Concatenate the chunks' pieces in order, in parallel (each chunk copies into its own range). The corners
+  // stay where the chunks wrote them, unless one spilled over its range: then they are concatenated too.
   std::vector<std::size_t> piece_at(n_chunks + 1, 0), key_at(n_chunks + 1, 0), face_at(n_chunks + 1, 0);
+  bool spilled = !in_place;
   for (std::size_t c = 0; c < n_chunks; ++c) {
     piece_at[c + 1] = piece_at[c] + chunks[c].pieces.size();
-    key_at[c + 1] = key_at[c] + chunks[c].keys.size();
+    key_at[c + 1] = key_at[c] + chunks[c].n_keys;
     face_at[c + 1] = face_at[c] + chunks[c].face_count.size();
+    spilled = spilled || chunks[c].n_keys > chunks[c].key_cap;
+  }
+  if (key_at[n_chunks] > std::size_t(UINT32_MAX))
+    TT_THROW(InvalidInput, "constrain topology: the cut has more than 2^32 piece corners");
+  HugeVector<PointKey> keys;
+  HugeVector<std::uint8_t> tags;
+  if (spilled) {
+    keys.resize(key_at[n_chunks]);
+    tags.resize(key_at[n_chunks]);
+  } else {
+    key_at = key_base;
   }
   cut.pieces.resize(piece_at[n_chunks]);
-  cut.keys.resize(key_at[n_chunks]);
-  cut.tags.resize(key_at[n_chunks]);
   cut.face_pieces.assign(face_at[n_chunks] + 1, 0);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n_chunks), [&](const tbb::blocked_range<std::size_t>& r) {
     for (std::size_t c = r.begin(); c != r.end(); ++c) {
@@ -393,17 +435,26 @@ LatticeCut cut_by_lattice(const SurfaceMesh& mesh, const openvdb::math::Transfor
         out[i] = ch.pieces[i];
         out[i].begin += key_offset;
       }
-      std::copy(ch.keys.begin(), ch.keys.end(), cut.keys.begin() + std::ptrdiff_t(key_at[c]));
-      std::copy(ch.tags.begin(), ch.tags.end(), cut.tags.begin() + std::ptrdiff_t(key_at[c]));
+      if (spilled) {
+        const std::size_t own = std::min(ch.n_keys, ch.key_cap);
+        std::copy(ch.keys, ch.keys + own, keys.begin() + std::ptrdiff_t(key_at[c]));
+        std::copy(ch.tags, ch.tags + own, tags.begin() + std::ptrdiff_t(key_at[c]));
+        std::copy(ch.spill_keys.begin(), ch.spill_keys.end(), keys.begin() + std::ptrdiff_t(key_at[c] + own));
+        std::copy(ch.spill_tags.begin(), ch.spill_tags.end(), tags.begin() + std::ptrdiff_t(key_at[c] + own));
+      }
       // Piece offsets of the chunk's faces, relative to the chunk's first piece.
       std::uint32_t* fp = cut.face_pieces.data() + face_at[c] + 1;
       std::uint32_t acc = std::uint32_t(piece_at[c]);
       for (std::size_t i = 0; i < ch.face_count.size(); ++i) fp[i] = acc += ch.face_count[i];
       HugeVector<Piece>().swap(ch.pieces);  // free as we go
-      HugeVector<PointKey>().swap(ch.keys);
-      HugeVector<std::uint8_t>().swap(ch.tags);
+      HugeVector<PointKey>().swap(ch.spill_keys);
+      HugeVector<std::uint8_t>().swap(ch.spill_tags);
     }
   });
+  if (spilled) {
+    cut.keys.swap(keys);
+    cut.tags.swap(tags);
+  }
   for (Chunk& c : chunks) {
     cut.bad_faces.insert(cut.bad_faces.end(), c.bad_faces.begin(), c.bad_faces.end());
     cut.bad_boxes.insert(cut.bad_boxes.end(), c.bad_boxes.begin(), c.bad_boxes.end());

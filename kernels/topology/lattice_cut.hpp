@@ -86,9 +86,11 @@ struct LatticeCut {
   HugeVector<Piece> pieces;        //!< in face order; the pieces of a face are contiguous
   std::vector<std::uint32_t> face_pieces;  //!< face f has pieces [face_pieces[f], face_pieces[f+1])
   std::vector<std::array<Index, 3>> face_vertices;  //!< per live face: SurfaceMesh::vertices, as indices
-  HugeVector<PointKey> keys;       //!< corners of the pieces
+  //! Corners of the pieces (piece p's are keys[p.begin, p.begin + p.size)); between the corners of consecutive
+  //! chunks of faces there may be unused entries.
+  HugeVector<PointKey> keys;
   //! Per piece edge (corner i to i+1): the cube face of the piece's cell it lies on (2 * axis + side),
-  //! or kOnMeshEdge when it is part of a mesh edge.
+  //! or kOnMeshEdge when it is part of a mesh edge. Indexed like keys.
   HugeVector<std::uint8_t> tags;
   //! Faces whose clipping met a configuration that rounding made inconsistent (never seen in practice;
   //! kept as a fallback): they have no pieces, and every cell of their bounding box is complex.
