@@ -68,6 +68,9 @@ std::vector<Binding> bindings(TrackerParams& p) {
       {"coarse.coarse_pass_alpha_reg_min", &p.coarse_params.coarse_pass_alpha_reg_min, 1e-12, inf},
       {"coarse.max_iterations_per_level_after_pass", &p.coarse_params.max_iterations_per_level_after_pass, 1, 1e6},
       {"coarse.closest_point_levels", &p.coarse_params.closest_point_levels, 0, 16},
+      // Speed between consecutive frames (our additions, kernels/registration/coarse.hpp).
+      {"coarse.retract_rotations", &p.coarse_params.retract_rotations},
+      {"coarse.check_fit_first", &p.coarse_params.check_fit_first},
       {"fine.sigma", &p.fine_params.sigma, 0, inf},
       {"fine.max_normal_angle_deg", &p.fine_params.max_normal_angle_deg, 0, 180},
       {"fine.fit_weight", &p.fine_params.fit_weight, 0, inf},

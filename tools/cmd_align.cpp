@@ -76,6 +76,7 @@ nlohmann::json run_coarse(SurfaceMesh& mesh, const TargetSurface& target, const 
                       {"energy_before", c.energy_before},
                       {"energy", c.energy},
                       {"motion", c.motion},
+                      {"step", c.step},
                       {"fit_distance", c.fit_distance},
                       {"pcg_iterations", c.pcg_iterations},
                       {"correspondences", c.correspondences}});
@@ -92,6 +93,7 @@ nlohmann::json run_coarse(SurfaceMesh& mesh, const TargetSurface& target, const 
                      {"energy_end", r.energy_end},
                      {"misfit_start", r.misfit_start},
                      {"coarse_pass_iterations", r.coarse_pass_iterations},
+                     {"fitted_at_start", r.fitted_at_start},
                      {"prealign", {{"applied", r.prealigned},
                                    {"iterations", r.prealign.iterations},
                                    {"distance_start", r.prealign.distance_start},

@@ -18,10 +18,15 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstdio>
+#include <cstdlib>
 #include <map>
 #include <memory>
+#include <string>
 #include <tuple>
 
+#include "kernels/gen/synthetic.hpp"
+#include "kernels/mesh/mesh_convert.hpp"
 #include "kernels/mesh/mesh_queries.hpp"
 #include "kernels/registration/block_cholesky.hpp"
 #include "kernels/registration/coarse.hpp"
@@ -101,6 +106,171 @@ BENCHMARK(BM_AlignCoarseFine)
     ->UseRealTime()
     ->MeasureProcessCPUTime()
     ->Iterations(1);
+
+// The tracker's case (issue 6): consecutive frames of `gen blobs` (100 frames per turn) at a given grid
+// resolution (140: about 25k vertices, 280: about 100k), the source being frame 97 re-meshed by
+// improve_mesh at its own mean edge length (the tracker's M), the target frame 98 as marching cubes gives
+// it. The ground truth is the blobs' rotation: "truth_pct" is the mean distance of the source vertices to
+// where the rotation takes them after coarse + fine, "coarse_truth_pct" after coarse alone, in percent of
+// the target's bounding-box diagonal.
+struct BlobsStep {
+  SurfaceMesh source;
+  std::vector<Vec3> truth;
+  std::unique_ptr<TargetSurface> target;
+  double diagonal = 0;
+};
+
+const BlobsStep& blobs_step(int resolution) {
+  static std::map<int, std::unique_ptr<BlobsStep>> cache;
+  auto& f = cache[resolution];
+  if (!f) {
+    f = std::make_unique<BlobsStep>();
+    SyntheticParams p;
+    p.kind = SyntheticKind::kBlobs;
+    p.frames = 100;
+    p.resolution = resolution;
+    const SyntheticScene scene(p);
+    const int k = 97;
+    f->source = test::resample(to_surface_mesh(scene.frame_mesh(k)), 1.0);
+    const SurfaceMesh target = to_surface_mesh(scene.frame_mesh(k + 1));
+    f->target = std::make_unique<TargetSurface>(TargetSurface::from_mesh(target));
+    f->diagonal = bounding_box(target).diagonal();
+    const RigidMotion a = scene.blobs_motion(k), b = scene.blobs_motion(k + 1);
+    const Eigen::Matrix3d R = b.rotation * a.rotation.transpose();
+    f->truth = f->source.positions();
+    for (Vec3& x : f->truth) x = R * (x - a.center) + b.center;
+  }
+  return *f;
+}
+
+double truth_error(const SurfaceMesh& mesh, const BlobsStep& f) {
+  double sum = 0;
+  std::size_t n = 0;
+  for (std::size_t i = 0; i < f.truth.size(); ++i)
+    if (!mesh.is_deleted(Vertex(Index(i)))) {
+      sum += (mesh.positions()[i] - f.truth[i]).norm();
+      ++n;
+    }
+  return n ? 100 * sum / (double(n) * f.diagonal) : 0;
+}
+
+// Comparisons without rebuilding: TOPOTRACK_BENCH_COARSE="name=value,..." overrides CoarseParams
+// fields of BM_TrackerStep (retract_rotations, check_fit_first, fit_tolerance, step_tolerance,
+// convergence_tolerance, max_iterations_per_level, max_pcg_iterations, coarse_pass_density,
+// coarse_pass_alpha_reg_min, coarse_pass_misfit).
+void override_params(CoarseParams& p) {
+  const char* env = std::getenv("TOPOTRACK_BENCH_COARSE");
+  if (!env) return;
+  const std::string all(env);
+  std::size_t at = 0;
+  while (at < all.size()) {
+    const std::size_t end = std::min(all.find(',', at), all.size()), eq = all.find('=', at);
+    if (eq < end) {
+      const std::string name = all.substr(at, eq - at);
+      const double v = std::atof(all.substr(eq + 1, end - eq - 1).c_str());
+      if (name == "retract_rotations") p.retract_rotations = v != 0;
+      else if (name == "check_fit_first") p.check_fit_first = v != 0;
+      else if (name == "fit_tolerance") p.fit_tolerance = v;
+      else if (name == "step_tolerance") p.step_tolerance = v;
+      else if (name == "convergence_tolerance") p.convergence_tolerance = v;
+      else if (name == "max_iterations_per_level") p.max_iterations_per_level = int(v);
+      else if (name == "max_pcg_iterations") p.max_pcg_iterations = int(v);
+      else if (name == "coarse_pass_density") p.coarse_pass_density = v;
+      else if (name == "coarse_pass_alpha_reg_min") p.coarse_pass_alpha_reg_min = v;
+      else if (name == "coarse_pass_misfit") p.coarse_pass_misfit = v;
+      else std::fprintf(stderr, "TOPOTRACK_BENCH_COARSE: unknown field %s\n", name.c_str());
+    }
+    at = end + 1;
+  }
+}
+
+void BM_TrackerStep(benchmark::State& state) {
+  const BlobsStep& f = blobs_step(int(state.range(0)));
+  CoarseParams params;
+  params.graph_density = double(state.range(2)) / 100.0;
+  if (state.range(1) == 0) {
+    params.prealign_misfit = 0;
+    params.coarse_pass_misfit = 0;
+  }
+  override_params(params);
+  CoarseReport c;
+  FineReport fr;
+  double coarse_truth = 0, truth = 0;
+  for (auto _ : state) {
+    state.PauseTiming();
+    SurfaceMesh mesh = f.source.clone();
+    state.ResumeTiming();
+    c = align_coarse(mesh, *f.target, params);
+    state.PauseTiming();
+    coarse_truth = truth_error(mesh, f);
+    state.ResumeTiming();
+    fr = align_fine(mesh, *f.target);
+    benchmark::DoNotOptimize(mesh.positions().data());
+    state.PauseTiming();
+    truth = truth_error(mesh, f);
+    state.ResumeTiming();
+  }
+  state.counters["vertices"] = double(f.source.n_vertices());
+  state.counters["unaligned_truth_pct"] = truth_error(f.source, f);
+  state.counters["coarse_truth_pct"] = coarse_truth;
+  state.counters["truth_pct"] = truth;
+  state.counters["misfit_pct"] = 100 * c.misfit_start;
+  state.counters["nodes"] = c.nodes;
+  state.counters["rounds"] = c.iterations;
+  state.counters["coarse_pass_rounds"] = c.coarse_pass_iterations;
+  state.counters["pcg_iterations"] = c.pcg_iterations;
+  state.counters["coarse_s"] = c.seconds_total;
+  state.counters["coarse_prealign_s"] = c.seconds_prealign;
+  state.counters["coarse_graph_s"] = c.seconds_graph;
+  state.counters["coarse_corr_s"] = c.seconds_correspondences;
+  state.counters["coarse_assembly_s"] = c.seconds_assembly;
+  state.counters["coarse_factor_s"] = c.seconds_factorisation;
+  state.counters["coarse_solve_s"] = c.seconds_solve;
+  state.counters["fine_s"] = fr.seconds_total;
+  if (std::getenv("TOPOTRACK_BENCH_ROUNDS"))  // per-round figures, for profiling the schedule
+    for (const CoarseRound& r : c.rounds)
+      std::fprintf(stderr, "round alpha_reg %g step %g motion %.3f fit %.3f pcg %d energy %.4g -> %.4g\n", r.alpha_reg,
+                   r.step, r.motion, r.fit_distance, r.pcg_iterations, r.energy_before, r.energy);
+}
+// {grid resolution, large-motion stages (0: off, 1: the defaults), graph density in percent}; density
+// 25 without the large-motion stages is the defaults' low-density pass alone.
+BENCHMARK(BM_TrackerStep)
+    ->ArgsProduct({{140, 280}, {0, 1}, {100}})
+    ->Args({280, 0, 25})
+    ->ArgNames({"resolution", "large", "density"})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime()
+    ->MeasureProcessCPUTime()
+    ->Iterations(1);
+
+// The deformation graph alone (§4.2: geodesic node sampling, k nearest nodes, edges) on the tracker's
+// M of BM_TrackerStep, at the full and the quarter node density (the low-density pass); "sample_ms" is
+// the node sampling alone (all that the full density costs when its nodes are found fitted).
+void BM_DeformationGraph(benchmark::State& state) {
+  const BlobsStep& f = blobs_step(int(state.range(0)));
+  const double spacing = 4 * mean_edge_length(f.source) / std::sqrt(double(state.range(1)) / 100.0);
+  double fastest = 1e30;
+  std::size_t nodes = 0;
+  for (auto _ : state) {
+    const auto t0 = std::chrono::steady_clock::now();
+    const DeformationGraph g = build_deformation_graph(f.source, spacing, 4);
+    fastest = std::min(fastest, std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+    nodes = g.n_nodes();
+  }
+  const auto t0 = std::chrono::steady_clock::now();
+  benchmark::DoNotOptimize(sample_graph_nodes(f.source, spacing).data());
+  state.counters["sample_ms"] = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  state.counters["fastest_ms"] = fastest;
+  state.counters["nodes"] = double(nodes);
+  state.counters["vertices"] = double(f.source.n_vertices());
+}
+// {grid resolution, density in percent}
+BENCHMARK(BM_DeformationGraph)
+    ->ArgsProduct({{280}, {100, 25}})
+    ->ArgNames({"resolution", "density"})
+    ->Unit(benchmark::kMillisecond)
+    ->MeasureProcessCPUTime()
+    ->Iterations(5);
 
 // One Gauss–Newton round with either backend: the time of one numeric factorisation.
 void BM_Factorisation(benchmark::State& state) {

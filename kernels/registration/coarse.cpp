@@ -3,6 +3,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -54,15 +55,16 @@ Vec3 skin(const Problem& p, const std::vector<NodeState>& s, Index v) {
   return wsum > 0 ? out : x;
 }
 
-// Angle-weighted normal of vertex v of the deformed mesh, from its deformed one-ring.
-Vec3 skinned_normal(const Problem& p, const std::vector<NodeState>& s, Vertex v, std::vector<Halfedge>& ring) {
-  p.mesh.outgoing(v, ring);
-  const Vec3 x = skin(p, s, v.idx);
+// Angle-weighted normal of vertex v, its one-ring's vertices placed by `position` (by handle index).
+template <class Position>
+Vec3 angle_weighted_normal(const SurfaceMesh& mesh, Vertex v, std::vector<Halfedge>& ring, const Position& position) {
+  mesh.outgoing(v, ring);
+  const Vec3 x = position(v.idx);
   Vec3 n = Vec3::Zero();
   for (Halfedge h : ring) {
-    if (p.mesh.is_boundary(h)) continue;
-    const Vec3 a = skin(p, s, p.mesh.to_vertex(h).idx) - x;
-    const Vec3 b = skin(p, s, p.mesh.to_vertex(p.mesh.next(h)).idx) - x;
+    if (mesh.is_boundary(h)) continue;
+    const Vec3 a = position(mesh.to_vertex(h).idx) - x;
+    const Vec3 b = position(mesh.to_vertex(mesh.next(h)).idx) - x;
     const Vec3 c = a.cross(b);
     const double len = c.norm(), la = a.norm(), lb = b.norm();
     if (!(len > 0) || !(la > 0) || !(lb > 0)) continue;
@@ -71,6 +73,11 @@ Vec3 skinned_normal(const Problem& p, const std::vector<NodeState>& s, Vertex v,
   }
   const double len = n.norm();
   return len > 0 ? Vec3(n / len) : Vec3::Zero();
+}
+
+// Angle-weighted normal of vertex v of the deformed mesh, from its deformed one-ring.
+Vec3 skinned_normal(const Problem& p, const std::vector<NodeState>& s, Vertex v, std::vector<Halfedge>& ring) {
+  return angle_weighted_normal(p.mesh, v, ring, [&](Index u) { return skin(p, s, u); });
 }
 
 double rigid_energy(const Mat3& A) {
@@ -425,20 +432,61 @@ CoarseReport align_coarse(SurfaceMesh& mesh, const TargetSurface& target, const 
   if (!(D > 0) || !std::isfinite(D)) TT_THROW(InvalidInput, "align_coarse: degenerate or non-finite scene");
   const double inv_d2 = 1.0 / (D * D);
 
+  CorrespondenceParams cparams;
+  cparams.max_normal_angle_deg = params.max_normal_angle_deg;
+  cparams.max_closest_ratio = params.max_closest_ratio;
+  cparams.closest_point = large_motion && params.closest_point_levels > 0;
+
   t0 = Clock::now();
   const double spacing = params.node_spacing_factor * edge / std::sqrt(params.graph_density);
-  const DeformationGraph graph = build_deformation_graph(mesh, spacing, params.k);
+  std::vector<Vertex> nodes = sample_graph_nodes(mesh, spacing);
+  rep.node_spacing = spacing;
+  if (params.check_fit_first && params.fit_tolerance > 0) {
+    // Converged before the first step: the nodes already lie on their correspondences (the same
+    // measure and threshold that end the schedule after a round), so the graph is not completed.
+    const auto tc = Clock::now();
+    const std::size_t n = nodes.size();
+    std::vector<Vec3> x(n), normal(n);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 64), [&](const auto& r) {
+      std::vector<Halfedge> ring;
+      for (std::size_t j = r.begin(); j != r.end(); ++j) {
+        x[j] = mesh.position(nodes[j]);
+        normal[j] = angle_weighted_normal(mesh, nodes[j], ring, [&](Index u) { return mesh.positions()[u]; });
+      }
+    });
+    const std::vector<Correspondence> corr = find_correspondences(target, x, normal, cparams);
+    const CorrespondenceCounts counts = count_correspondences(corr);
+    double fit_distance = 0;
+    for (std::size_t j = 0; j < n; ++j)
+      if (corr[j].valid()) fit_distance += (x[j] - corr[j].point).norm();
+    fit_distance /= double(std::max<std::size_t>(1, counts.ok));
+    rep.seconds_correspondences += seconds_since(tc);
+    if (counts.ok > 0 && fit_distance <= params.fit_tolerance * edge) {
+      rep.fitted_at_start = true;
+      rep.levels = 0;
+      rep.nodes = int(n);
+      rep.correspondences = counts.ok;
+      rep.pruned_no_hit = counts.no_hit;
+      rep.pruned_normal = counts.normal_angle;
+      rep.pruned_distance = counts.too_far;
+      rep.mean_fit_distance = fit_distance;
+      rep.alpha_reg_end = params.alpha_reg_start;
+      rep.seconds_graph = seconds_since(t0) - rep.seconds_correspondences;
+      rep.seconds_total = seconds_since(t_total);
+      return rep;
+    }
+  }
+  const DeformationGraph graph = build_deformation_graph(mesh, std::move(nodes), spacing, params.k);
   const std::vector<Vec3> rest = mesh.positions();
   const Problem problem{graph, rest, mesh};
   const std::size_t nn = graph.n_nodes();
   rep.nodes = int(nn);
   rep.graph_edges = int(graph.edges.size());
-  rep.node_spacing = spacing;
   const bool direct = params.linear_solver == CoarseLinearSolver::Direct;
   SystemPattern pattern = direct ? build_pattern(graph, 12) : SystemPattern{};
   SystemPattern precond = direct ? SystemPattern{} : build_pattern(graph, 4);
   SparseCholesky solver(params.solver);
-  rep.seconds_graph = seconds_since(t0);
+  rep.seconds_graph = seconds_since(t0) - rep.seconds_correspondences;
   t0 = Clock::now();
   BlockCholesky block_solver;
   if (direct) solver.analyze(pattern.H);
@@ -446,10 +494,6 @@ CoarseReport align_coarse(SurfaceMesh& mesh, const TargetSurface& target, const 
   bool refactor = true;
   NodeSystem node_system;
   rep.seconds_factorisation += seconds_since(t0);
-
-  CorrespondenceParams cparams;
-  cparams.max_normal_angle_deg = params.max_normal_angle_deg;
-  cparams.max_closest_ratio = params.max_closest_ratio;
 
   std::vector<NodeState> state(nn), trial(nn);
   std::vector<Vec3> node_x(nn), node_n(nn);
@@ -521,17 +565,34 @@ CoarseReport align_coarse(SurfaceMesh& mesh, const TargetSurface& target, const 
     t0 = Clock::now();
     Energy after = before;
     bool accepted = false;
+    double step = 0;
+    // With `retract_rotations` the rotational part W A of each dA (W = skew(dA A^T)) is taken along the
+    // rotation exp(t W) A instead of the line A + t W A, which leaves the rotations quadratically in t.
+    std::vector<Vec3> spin(params.retract_rotations ? nn : 0);
+    for (std::size_t j = 0; j < spin.size(); ++j) {
+      const Mat3 M = Eigen::Map<const Mat3>(delta.data() + 12 * j) * state[j].A.transpose();
+      spin[j] = 0.5 * Vec3(M(2, 1) - M(1, 2), M(0, 2) - M(2, 0), M(1, 0) - M(0, 1));
+    }
     for (double t = 1.0; t >= 1.0 / 16; t *= 0.5) {
       for (std::size_t j = 0; j < nn; ++j) {
         const auto dj = delta.segment<12>(Eigen::Index(12 * j));
-        trial[j].A = state[j].A + t * Eigen::Map<const Mat3>(dj.data());
+        const Mat3 dA = Eigen::Map<const Mat3>(dj.data());
+        trial[j].A = state[j].A + t * dA;
         trial[j].b = state[j].b + t * dj.tail<3>();
+        if (spin.empty()) continue;
+        const double angle = spin[j].norm();
+        if (!(angle > 0)) continue;
+        Mat3 W;
+        W << 0, -spin[j].z(), spin[j].y(), spin[j].z(), 0, -spin[j].x(), -spin[j].y(), spin[j].x(), 0;
+        const Mat3 R = Eigen::AngleAxisd(t * angle, spin[j] / angle).toRotationMatrix();
+        trial[j].A = R * state[j].A + t * (dA - W * state[j].A);
       }
       const Energy e = evaluate_energy(problem, trial, corr, w, fit_scale);
       if (e.total <= before.total) {
         after = e;
         state.swap(trial);
         accepted = true;
+        step = t;
         break;
       }
     }
@@ -548,7 +609,7 @@ CoarseReport align_coarse(SurfaceMesh& mesh, const TargetSurface& target, const 
     rep.seconds_assembly += seconds_since(t0);
     rep.iterations = it + 1;
     rep.energy_history.push_back(after.total);
-    rep.rounds.push_back({alpha_reg, before.total, after.total, motion / edge, fit_distance / edge, pcg_iterations, counts.ok});
+    rep.rounds.push_back({alpha_reg, before.total, after.total, motion / edge, fit_distance / edge, step, pcg_iterations, counts.ok});
     rep.energy_end = after.total;
     rep.fit_end = after.fit;
     rep.alpha_reg_end = alpha_reg;

@@ -33,4 +33,13 @@ struct DeformationGraph {
 //! \pre no isolated live vertex.  \throw InvalidInput when spacing <= 0, k < 1 or the mesh is empty.
 DeformationGraph build_deformation_graph(const SurfaceMesh& mesh, double spacing, int k = 4);
 
+//! The graph's nodes alone, the first step of build_deformation_graph (cheap: one bounded Dijkstra
+//! per node, radius `spacing`), in the order the graph numbers them.
+//! \throw InvalidInput when spacing <= 0 or the mesh is empty.
+std::vector<Vertex> sample_graph_nodes(const SurfaceMesh& mesh, double spacing);
+
+//! build_deformation_graph on nodes already sampled by sample_graph_nodes(mesh, spacing).
+//! \throw InvalidInput as build_deformation_graph, or on a node that is not a live vertex.
+DeformationGraph build_deformation_graph(const SurfaceMesh& mesh, std::vector<Vertex> nodes, double spacing, int k = 4);
+
 }  // namespace topotrack

@@ -2,8 +2,11 @@
 #include <gtest/gtest.h>
 #include <tbb/task_arena.h>
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numbers>
+#include <queue>
 
 #include "kernels/mesh/mesh_queries.hpp"
 #include "kernels/registration/coarse.hpp"
@@ -102,6 +105,67 @@ TEST(DeformationGraph, ComponentsNeverShareNodes) {
   for (const auto& [i, j] : g.edges) EXPECT_EQ(side(i), side(j));
 }
 
+// The k + 1 nearest nodes of every vertex against a brute force (a full Dijkstra from every node), on
+// a blob and a small sphere whose vertices have fewer than k + 1 nodes within the first search radius
+// (the second search) or at all (d_max is then the search radius, 2.5 spacings).
+TEST(DeformationGraph, NearestNodesAreExact) {
+  SurfaceMesh mesh = test::merge(blob(4), test::icosphere(2, 0.12, Vec3(3, 0, 0))).mesh();
+  const double spacing = 4 * mean_edge_length(blob(4).mesh()), radius = 2.5 * spacing;
+  const std::vector<Vertex> nodes = sample_graph_nodes(mesh, spacing);
+  const DeformationGraph g = build_deformation_graph(mesh, nodes, spacing, 4);
+  ASSERT_EQ(g.node_vertex, nodes);
+  const DeformationGraph same = build_deformation_graph(mesh, spacing, 4);
+  EXPECT_EQ(same.influence_node, g.influence_node);
+  EXPECT_EQ(same.influence_weight, g.influence_weight);
+  const std::size_t nv = mesh.vertices_size();
+  std::vector<std::vector<std::pair<double, Index>>> cand(nv);
+  for (std::size_t j = 0; j < nodes.size(); ++j) {
+    std::vector<double> d(nv, std::numeric_limits<double>::infinity());
+    using Item = std::pair<double, Index>;
+    std::priority_queue<Item, std::vector<Item>, std::greater<>> q;
+    d[nodes[j].idx] = 0;
+    q.push({0.0, nodes[j].idx});
+    std::vector<Halfedge> ring;
+    while (!q.empty()) {
+      const auto [du, u] = q.top();
+      q.pop();
+      if (du > d[u]) continue;
+      mesh.outgoing(Vertex(u), ring);
+      for (Halfedge h : ring) {
+        const Index w = mesh.to_vertex(h).idx;
+        const double nd = du + (mesh.positions()[w] - mesh.positions()[u]).norm();
+        if (nd < d[w]) {
+          d[w] = nd;
+          q.push({nd, w});
+        }
+      }
+    }
+    for (std::size_t v = 0; v < nv; ++v)
+      if (d[v] <= radius) cand[v].push_back({d[v], Index(j)});
+  }
+  std::size_t small_sphere = 0;
+  for (std::size_t v = 0; v < nv; ++v) {
+    std::sort(cand[v].begin(), cand[v].end());
+    ASSERT_FALSE(cand[v].empty());
+    small_sphere += cand[v].size() < 5;
+    const double dmax = cand[v].size() > 4 ? cand[v][4].first : radius;
+    double sum = 0;
+    for (std::size_t s = 0; s < 4 && s < cand[v].size(); ++s) sum += std::pow(1 - cand[v][s].first / dmax, 2);
+    for (std::size_t s = 0; s < 4; ++s) {
+      if (s >= cand[v].size()) {
+        EXPECT_EQ(g.influence_node[v * 4 + s], kInvalidIndex);
+        continue;
+      }
+      EXPECT_EQ(g.influence_node[v * 4 + s], cand[v][s].second) << "vertex " << v << " slot " << s;
+      EXPECT_NEAR(g.influence_weight[v * 4 + s], std::pow(1 - cand[v][s].first / dmax, 2) / sum, 1e-9);
+    }
+  }
+  EXPECT_EQ(small_sphere, test::icosphere(2, 0.12).positions.size());  // every vertex of the small sphere
+  const std::vector<Vertex> outside{Vertex{Index(nv)}};
+  EXPECT_THROW(build_deformation_graph(mesh, outside, spacing, 4), InvalidInput);
+  EXPECT_THROW(sample_graph_nodes(mesh, -1.0), InvalidInput);
+}
+
 // --- correspondences -----------------------------------------------------------------------------
 
 TEST(Correspondences, PruningRules) {
@@ -182,12 +246,13 @@ TEST(Alignment, RigidRotationIsRecovered) {
 }
 
 // Far beyond the capture range of normal rays (a third of the shape's size and 70 degrees): the rigid
-// pre-alignment runs first, and without it the coarse stage stays far off.
+// pre-alignment runs first, and without it (nor the rotation retraction of the Gauss–Newton steps) the
+// coarse stage stays far off. The retraction alone recovers it too.
 TEST(Alignment, LargeMotionIsPreAligned) {
   const Eigen::Matrix3d R = rotation(70, Vec3(0.2, 1, 0.4));
   const Vec3 t(0.6, -0.3, 0.2);
   auto transform = [&](const Vec3& p) { return Vec3(R * p + t); };
-  Case with = make_case(transform), without = make_case(transform);
+  Case with = make_case(transform), without = make_case(transform), retracted = make_case(transform);
   const double diag = with.target.bbox_diagonal();
   const double before = mean_error(with.source, with.truth);
   const CoarseReport cr = align_coarse(with.source, with.target);
@@ -197,12 +262,17 @@ TEST(Alignment, LargeMotionIsPreAligned) {
   align_fine(with.source, with.target);
   CoarseParams off;
   off.prealign_misfit = 0;
+  const CoarseReport cr2 = align_coarse(retracted.source, retracted.target, off);
+  EXPECT_FALSE(cr2.prealigned);
+  align_fine(retracted.source, retracted.target);
+  off.retract_rotations = false;
   const CoarseReport co = align_coarse(without.source, without.target, off);
   EXPECT_FALSE(co.prealigned);
   align_fine(without.source, without.target);
   const double after = mean_error(with.source, with.truth), after_off = mean_error(without.source, without.truth);
   EXPECT_LT(after, 0.01 * diag) << "before " << before / diag;
   EXPECT_GT(after_off, 5 * after);
+  EXPECT_LT(mean_error(retracted.source, retracted.truth), 0.01 * diag);
   with.source.validate();
 }
 
@@ -234,7 +304,7 @@ TEST(Alignment, AffineStretchIsRecovered) {
 
 TEST(Alignment, EnergiesDecrease) {
   Case c = make_case([](const Vec3& p) { return Vec3(p + Vec3(0.1, 0, 0)); });
-  const CoarseReport cr = align_coarse(c.source, c.target);
+  const CoarseReport cr = align_coarse(c.source, c.target, paper_scheme());
   ASSERT_FALSE(cr.energy_history.empty());
   EXPECT_LE(cr.energy_history.front(), cr.energy_start);
   EXPECT_LT(cr.fit_end, cr.fit_start);
@@ -276,6 +346,27 @@ TEST(Alignment, RoundsAreReported) {
   EXPECT_LT(mean_error(c.source, c.truth), 0.01 * c.target.bbox_diagonal());
 }
 
+// A turn of a few degrees, the tracker's consecutive frames: along the straight line A + t dA the
+// rigidity term makes the line search cut the Gauss–Newton step at alpha_reg 1000 and the rounds crawl;
+// retracted onto rotations the full steps are taken and the schedule ends sooner, as accurate.
+TEST(Alignment, RotationStepsAreRetracted) {
+  auto turn = [](const Vec3& p) { return Vec3(rotation(8, Vec3(0.2, 0.1, 1)) * p); };
+  Case a = make_case(turn), b = make_case(turn);
+  CoarseParams p = paper_scheme();
+  const CoarseReport with = align_coarse(a.source, a.target, p);
+  p.retract_rotations = false;
+  const CoarseReport without = align_coarse(b.source, b.target, p);
+  ASSERT_FALSE(with.rounds.empty());
+  ASSERT_FALSE(without.rounds.empty());
+  // Measured: first steps 1/4 vs 1/16, 23 rounds vs 40 (the cap), error 1.8e-5 vs 5.8e-5 of the diagonal.
+  EXPECT_GE(with.rounds.front().step, 2 * without.rounds.front().step);
+  EXPECT_LT(with.iterations, without.iterations);
+  const double diag = a.target.bbox_diagonal();
+  EXPECT_LT(mean_error(a.source, a.truth), 1e-4 * diag);
+  EXPECT_LE(mean_error(a.source, a.truth), mean_error(b.source, b.truth));
+  for (const CoarseRound& r : with.rounds) EXPECT_LE(r.energy, r.energy_before);
+}
+
 TEST(Alignment, FinePrunesBeyondSigma) {
   // Sphere plus a far-away sphere that has no counterpart: the far one must not move.
   const test::Soup near_sphere = test::icosphere(3, 1.0);
@@ -308,14 +399,29 @@ TEST(Alignment, ComponentsWithoutCounterpartStayFinite) {
 
 TEST(Alignment, AlignedInputStopsAfterTheFirstLevel) {
   // Source and target the same surface (different sampling): nothing to fit, so the schedule ends
-  // once the first level has converged; with fit_tolerance 0 it runs down to alpha_reg_min.
+  // once the first level has converged; with fit_tolerance 0 it runs down to alpha_reg_min. By
+  // default the nodes are found fitted before the first step: no round at all, nothing moves.
   Case c = make_case([](const Vec3& p) { return p; });
-  SurfaceMesh full = c.source.clone();
-  const CoarseReport early = align_coarse(c.source, c.target);
+  SurfaceMesh full = c.source.clone(), checked = c.source.clone();
+  const std::vector<Vec3> before = c.source.positions();
+  const CoarseReport none = align_coarse(checked, c.target);
+  EXPECT_TRUE(none.fitted_at_start);
+  EXPECT_EQ(none.levels, 0);
+  EXPECT_EQ(none.iterations, 0);
+  EXPECT_GT(none.nodes, 20);
+  EXPECT_GT(none.correspondences, 0u);
+  EXPECT_LT(none.mean_fit_distance, 0.05 * mean_edge_length(c.source));
+  EXPECT_EQ(checked.positions(), before);
+  CoarseParams p;
+  p.check_fit_first = false;
+  const CoarseReport early = align_coarse(c.source, c.target, p);
+  EXPECT_FALSE(early.fitted_at_start);
   EXPECT_EQ(early.levels, 1);
+  EXPECT_GE(early.iterations, 1);
   EXPECT_LE(early.iterations, 3);
   EXPECT_LT(early.mean_fit_distance, 0.05 * mean_edge_length(c.source));
-  CoarseParams p;
+  EXPECT_EQ(early.nodes, none.nodes);
+  p = CoarseParams{};
   p.fit_tolerance = 0;
   const CoarseReport all = align_coarse(full, c.target, p);
   EXPECT_EQ(all.levels, 5);
