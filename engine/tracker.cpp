@@ -102,20 +102,43 @@ struct Tracker::Impl {
     return grid;
   }
 
-  void first_frame(const SurfaceMesh& target) {
+  //! The work on S_n alone (see PreparedFrame). Reads only params and voxel_size, which add_frame no longer
+  //! writes once the first frame is done: safe to run concurrently with add() from then on.
+  PreparedFrame prepare(SurfaceMesh surface, const std::string& name, const openvdb::FloatGrid* theta) const {
+    const auto t0 = Clock::now();
+    PreparedFrame p;
+    p.name = name;
+    p.surface = std::move(surface);
+    if (voxel_size > 0) {  // before the first frame S_1 only becomes M (lines 1-2); nothing to prepare
+      if (p.surface.n_faces() > 0) p.target = std::make_unique<TargetSurface>(TargetSurface::from_mesh(p.surface));
+      if (params.topology) {  // φ_S, line 10
+        const auto t1 = Clock::now();
+        if (theta && std::abs(theta->voxelSize()[0] - voxel_size) <= 1e-9 * voxel_size) p.phi = theta->deepCopy();
+        else p.phi = signed_distance(p.surface, voxel_size, params.sdf_half_width, params.exact_sign_band);
+        p.voxel_size = voxel_size;
+        p.seconds.signed_distance = since(t1);
+      }
+    }
+    p.seconds.prepare = since(t0);
+    return p;
+  }
+
+  void first_frame(SurfaceMesh target) {
     // Algorithm 1, lines 1-2: M = S_1, ImproveMesh(M). The events of this first improvement relate the
     // input's triangulation to M, not two frames of M, so they are not part of any frame's list.
-    mesh = target.clone();
     edge_length = params.edge_length > 0 ? params.edge_length : mean_edge_length(target);
     if (!(edge_length > 0)) TT_THROW(InvalidInput, "the first frame has no edges to derive the edge length from");
+    mesh = std::move(target);
     voxel_size = params.voxel_size_factor * edge_length;
     improve(nullptr);
   }
 
-  void next_frame(const SurfaceMesh& target, const openvdb::FloatGrid* theta) {
+  void next_frame(PreparedFrame& frame) {
+    const SurfaceMesh& target = frame.surface;
     const IdField before = positions_by_id(mesh);
     if (mesh.n_faces() > 0 && target.n_faces() > 0) {
-      const TargetSurface surface = TargetSurface::from_mesh(target);
+      if (!frame.target) frame.target = std::make_unique<TargetSurface>(TargetSurface::from_mesh(target));
+      const TargetSurface& surface = *frame.target;
       if (params.projection_only) {
         const auto t0 = Clock::now();
         project_to_closest(mesh, surface);
@@ -142,8 +165,8 @@ struct Tracker::Impl {
         phi_m = distance(mesh);                               // line 8
         report.complex_cells_self = constrain(*phi_m);       // line 9
       }
-      openvdb::FloatGrid::Ptr phi_s;                          // line 10
-      if (theta && std::abs(theta->voxelSize()[0] - voxel_size) <= 1e-9 * voxel_size) phi_s = theta->deepCopy();
+      openvdb::FloatGrid::Ptr phi_s;                          // line 10, usually done by prepare
+      if (frame.phi && frame.voxel_size == voxel_size) phi_s = std::move(frame.phi);
       else phi_s = distance(target);
       if (phi_m && params.topology_tolerance > 0) {
         const auto t0 = Clock::now();
@@ -187,13 +210,15 @@ struct Tracker::Impl {
     velocities = std::move(vel);
   }
 
-  const FrameReport& add(const SurfaceMesh& target, const openvdb::FloatGrid* theta) {
+  const FrameReport& add(PreparedFrame frame) {
     const auto t0 = Clock::now();
     report = FrameReport{};
     report.index = frames;
+    report.seconds.signed_distance = frame.seconds.signed_distance;
+    report.seconds.prepare = frame.seconds.prepare;
     events.clear();
-    if (frames == 0 && mesh.n_faces() == 0) first_frame(target);
-    else next_frame(target, theta);
+    if (frames == 0 && mesh.n_faces() == 0) first_frame(std::move(frame.surface));
+    else next_frame(frame);
     if (frames == 0 || velocities.size() != mesh.vertices_size()) velocities.assign(mesh.vertices_size(), Vec3::Zero());
     canonicalize();
     ++frames;
@@ -202,7 +227,7 @@ struct Tracker::Impl {
     report.components = connected_components(mesh);
     report.euler = euler_characteristic(mesh);
     report.events_by_kind = events.count_by_kind();
-    report.seconds.total = since(t0);
+    report.seconds.total = since(t0) + frame.seconds.prepare;
     return report;
   }
 };
@@ -215,25 +240,45 @@ Tracker::~Tracker() = default;
 Tracker::Tracker(Tracker&&) noexcept = default;
 Tracker& Tracker::operator=(Tracker&&) noexcept = default;
 
-const FrameReport& Tracker::add_frame(const SurfaceMesh& target, const std::string& name) {
+PreparedFrame Tracker::prepare(SurfaceMesh target, const std::string& name) const {
+  const auto t0 = Clock::now();
   try {
     target.validate(/*require_closed=*/true);
   } catch (const TopologyError& e) {
     TT_THROW(InvalidInput, name << ": not a closed 2-manifold: " << e.what());
   }
-  if (impl_->frames == 0 && target.n_faces() == 0) TT_THROW(InvalidInput, name << ": the first frame is empty");
-  return impl_->add(target, nullptr);
+  PreparedFrame p = impl_->prepare(std::move(target), name, nullptr);
+  p.seconds.prepare = since(t0);  // with the check
+  return p;
 }
 
-const FrameReport& Tracker::add_frame(const openvdb::FloatGrid& target, const std::string& name) {
+PreparedFrame Tracker::prepare(const openvdb::FloatGrid& target, const std::string& name) const {
+  const auto t0 = Clock::now();
   SurfaceMesh surface;
   try {
     surface = to_surface_mesh(marching_cubes(target));
   } catch (const InvalidInput& e) {
     TT_THROW(InvalidInput, name << ": " << e.what());
   }
-  if (impl_->frames == 0) return add_frame(surface, name);
-  return impl_->add(surface, &target);
+  // The first frame is checked and used as a mesh; later ones take the level set as φ_S.
+  PreparedFrame p = impl_->voxel_size > 0 ? impl_->prepare(std::move(surface), name, &target)
+                                          : prepare(std::move(surface), name);
+  p.seconds.prepare = since(t0);
+  return p;
+}
+
+const FrameReport& Tracker::add_frame(PreparedFrame frame) {
+  if (impl_->frames == 0 && frame.surface.n_faces() == 0)
+    TT_THROW(InvalidInput, frame.name << ": the first frame is empty");
+  return impl_->add(std::move(frame));
+}
+
+const FrameReport& Tracker::add_frame(const SurfaceMesh& target, const std::string& name) {
+  return add_frame(prepare(target.clone(), name));
+}
+
+const FrameReport& Tracker::add_frame(const openvdb::FloatGrid& target, const std::string& name) {
+  return add_frame(prepare(target, name));
 }
 
 const SurfaceMesh& Tracker::mesh() const { return impl_->mesh; }

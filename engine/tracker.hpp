@@ -12,12 +12,31 @@
 #include "engine/profile.hpp"
 #include "io/event_list.hpp"
 #include "kernels/mesh/surface_mesh.hpp"
+#include "kernels/raycast/target_surface.hpp"
 
 namespace topotrack {
 
 //! Seconds spent per stage on one frame: the columns of the paper's Table 1 (I/O is the caller's).
+//! The work done by Tracker::prepare is included (signed_distance: φ_S; prepare: all of it), wherever
+//! and whenever it ran, so the columns add up to the work of the frame, not to its wall time.
 struct StageSeconds {
-  double coarse = 0, fine = 0, improve = 0, signed_distance = 0, topology = 0, total = 0;
+  double coarse = 0, fine = 0, improve = 0, signed_distance = 0, topology = 0;
+  double prepare = 0;  //!< Tracker::prepare: checking S_n, its ray-casting scene and φ_S
+  double total = 0;    //!< prepare + add_frame
+};
+
+//! S_n made ready for Tracker::add_frame: the part of Algorithm 1 that depends on S_n alone (and the
+//! voxel size, fixed by the first frame), so that a caller can compute it for frame n+1 while frame n is
+//! being tracked: the checked surface, its ray-casting scene for the alignment (§4.2, lines 5-6) and its
+//! signed distance φ_S (line 10, §4.3). Whatever is missing (the scene or φ_S of a frame prepared before
+//! the voxel size was known) add_frame computes itself; the result is the same either way, bit for bit.
+struct PreparedFrame {
+  std::string name;                        //!< for error messages
+  SurfaceMesh surface;                     //!< S_n (for a level set: its zero set)
+  std::unique_ptr<TargetSurface> target;   //!< the scene of S_n; null when S_n is empty or not built yet
+  openvdb::FloatGrid::Ptr phi;             //!< φ_S at `voxel_size`; null when not computed
+  double voxel_size = 0;                   //!< of phi
+  StageSeconds seconds;                    //!< signed_distance (φ_S) and prepare
 };
 
 //! What one call of Tracker::add_frame did.
@@ -44,12 +63,24 @@ public:
   Tracker(Tracker&&) noexcept;
   Tracker& operator=(Tracker&&) noexcept;
 
-  //! Track the next frame S_n (Algorithm 1, lines 4-14; for the first frame lines 1-2).
+  //! Track the next frame S_n (Algorithm 1, lines 4-14; for the first frame lines 1-2): add_frame(prepare(...)).
   //! \pre target is a closed 2-manifold (validate() passes). \throw InvalidInput if not, naming `name`.
   const FrameReport& add_frame(const SurfaceMesh& target, const std::string& name = "frame");
   //! Same with S_n given as a narrow-band level set (negative inside); it is used directly as φ_S when its
   //! voxel size matches the tracker's, and its zero set (marching cubes) as the surface for alignment.
   const FrameReport& add_frame(const openvdb::FloatGrid& target, const std::string& name = "frame");
+
+  //! Do the work of add_frame that depends on S_n alone (see PreparedFrame), so that a caller can read and
+  //! prepare frame n+1 while frame n is tracked. Const and thread-safe: it may run concurrently with other
+  //! prepare calls and, once the first frame is done (the voxel size is then fixed), with add_frame (not
+  //! with restore). Before the first frame it only checks the surface. It takes the surface: a caller
+  //! holding a const mesh passes a clone(). \pre as add_frame. \throw InvalidInput as add_frame, naming `name`.
+  PreparedFrame prepare(SurfaceMesh target, const std::string& name = "frame") const;
+  //! Same for a level set (see add_frame): φ_S is a copy of `target` when the voxel sizes match.
+  PreparedFrame prepare(const openvdb::FloatGrid& target, const std::string& name = "frame") const;
+  //! Track a prepared frame: the same result as add_frame on the surface it was prepared from.
+  //! \throw InvalidInput on an empty first frame.
+  const FrameReport& add_frame(PreparedFrame frame);
 
   //! The tracked mesh M after the last add_frame (compacted; ids are the persistent vertex ids).
   const SurfaceMesh& mesh() const;

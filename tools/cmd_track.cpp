@@ -1,12 +1,17 @@
 // topotrack track INPUT -o OUT: Algorithm 1 over a sequence, one frame at a time, with per-stage timings,
-// a progress display and --resume after a crash.
+// a progress display and --resume after a crash. Pipelined (issue #6): frame n+1 is read and prepared
+// (Tracker::prepare: its scene and φ_S) and frame n-1 written while frame n is tracked, on the one TBB pool.
 #include <sys/resource.h>
 #include <tbb/global_control.h>
+#include <tbb/task_arena.h>
+#include <tbb/task_group.h>
 
 #include <chrono>
 #include <cmath>
+#include <exception>
 #include <iostream>
 #include <nlohmann/json.hpp>
+#include <optional>
 
 #include "engine/checkpoint.hpp"
 #include "engine/frame_loader.hpp"
@@ -43,7 +48,10 @@ struct TrackOptions {
   bool close_holes = false;
   double max_hole = FrameLoadParams{}.max_hole_voxels;
   std::string name;
+  bool no_pipeline = false;
 };
+
+double since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
 double peak_memory_mb() {
   rusage u{};
@@ -66,7 +74,7 @@ std::string frame_file(const TrackOptions& opt, long number, const char* ext) {
   return opt.name + buf + ext;
 }
 
-nlohmann::json frame_json(const FrameReport& r, long number, double io_seconds) {
+nlohmann::json frame_json(const FrameReport& r, long number, double io_seconds, double wall_seconds) {
   nlohmann::json ev = nlohmann::json::object();
   for (int k = 1; k <= kEventKindCount; ++k)
     ev[std::string(to_string(EventKind(k)))] = r.events_by_kind.size() >= std::size_t(k) ? r.events_by_kind[k - 1] : 0;
@@ -88,8 +96,10 @@ nlohmann::json frame_json(const FrameReport& r, long number, double io_seconds) 
             {"improve", r.seconds.improve},
             {"signed_distance", r.seconds.signed_distance},
             {"topology", r.seconds.topology},
+            {"prepare", r.seconds.prepare},
             {"io", io_seconds},
-            {"total", r.seconds.total + io_seconds}}},
+            {"total", r.seconds.total + io_seconds},
+            {"wall", wall_seconds}}},
           {"peak_memory_mb", peak_memory_mb()}};
 }
 
@@ -105,6 +115,86 @@ MeshData output_mesh(const Tracker& tracker) {
   }
   d.attributes.push_back(std::move(v));
   return d;
+}
+
+//! Frame n read from disk and prepared for the tracker, possibly while frame n-1 was tracked. Errors are
+//! kept, to be raised when the loop reaches the frame: after every frame before it is written.
+struct ReadFrame {
+  FrameLoadReport load;
+  PreparedFrame prepared;
+  double io_seconds = 0;
+  std::exception_ptr load_error, prepare_error;
+};
+
+ReadFrame read_frame(const InputFrame& f, const FrameLoadParams& params, const Tracker& tracker) {
+  ReadFrame r;
+  const auto t0 = Clock::now();
+  LoadedFrame frame;
+  try {
+    frame = load_frame(f.path, params);
+  } catch (...) {
+    r.load_error = std::current_exception();
+    return r;
+  }
+  r.io_seconds = since(t0);
+  r.load = std::move(frame.report);
+  try {
+    const std::string name = f.path.string();
+    r.prepared = frame.grid ? tracker.prepare(*frame.grid, name) : tracker.prepare(std::move(frame.mesh), name);
+  } catch (...) {
+    r.prepare_error = std::current_exception();
+  }
+  return r;
+}
+
+//! Frame n's outputs, copied from the tracker so that they can be written while frame n+1 is tracked.
+struct FrameOutput {
+  std::size_t index = 0;
+  long number = 0;
+  std::string input;
+  MeshData mesh;
+  EventList events;
+  Checkpoint checkpoint;
+  FrameReport report;
+  FrameLoadReport load;
+  double io_seconds = 0, wall_seconds = 0;
+  std::string summary, json;  // for the progress display, set by write_output
+};
+
+//! The track.json being built and where the frame files go.
+struct OutputSink {
+  const TrackOptions& opt;
+  fs::path out, json_path, checkpoint_path;
+  nlohmann::json report;
+};
+
+//! Write frame n's PLY and events, then track.json, then (last: it marks the frame complete, its files all
+//! in place) the checkpoint. Each file is written atomically, so a killed run never shows a partial frame.
+void write_output(FrameOutput& o, OutputSink& sink) {
+  const auto t0 = Clock::now();
+  write_ply(sink.out / frame_file(sink.opt, o.number, ".ply"), o.mesh);
+  write_events(sink.out / frame_file(sink.opt, o.number, ".events"), o.events);
+  o.io_seconds += since(t0);
+  const FrameReport& r = o.report;
+  nlohmann::json fj = frame_json(r, o.number, o.io_seconds, o.wall_seconds);
+  fj["input"] = o.input;
+  if (o.load.holes_closed > 0) {
+    fj["input_repair"] = {{"holes_closed", o.load.holes_closed},
+                          {"hole_boundary_edges", o.load.hole_boundary_edges},
+                          {"largest_hole", o.load.largest_hole},
+                          {"voxel_size", o.load.voxel_size}};
+    for (const auto& w : o.load.warnings) fj["warnings"].push_back(w);
+  }
+  sink.report["frames"].push_back(fj);
+  sink.report["edge_length"] = o.checkpoint.target_edge_length;
+  sink.report["voxel_size"] = o.checkpoint.voxel_size;
+  write_file_atomic(sink.json_path, sink.report.dump(1) + "\n");
+  write_checkpoint(sink.checkpoint_path, o.checkpoint);
+  char summary[160];
+  std::snprintf(summary, sizeof summary, "%zu verts, %zu comps, %zu events, %.2fs", r.vertices, r.components,
+                o.events.size(), r.seconds.total + o.io_seconds);
+  o.summary = summary;
+  o.json = fj.dump();
 }
 
 void run_track(TrackOptions opt) {
@@ -159,14 +249,16 @@ void run_track(TrackOptions opt) {
   for (const auto& w : warnings) progress.message("warning: " + w);
 
   Tracker tracker(params);
-  nlohmann::json report = {{"version", 1},
-                           {"input", opt.input},
-                           {"name", opt.name},
-                           {"profile", opt.profile},
-                           {"parameters", params_json},
-                           {"threads", opt.threads},
-                           {"every", opt.every},
-                           {"frames", nlohmann::json::array()}};
+  OutputSink sink{opt, out, json_path, checkpoint_path, {}};
+  nlohmann::json& report = sink.report;
+  report = {{"version", 1},
+            {"input", opt.input},
+            {"name", opt.name},
+            {"profile", opt.profile},
+            {"parameters", params_json},
+            {"threads", opt.threads},
+            {"every", opt.every},
+            {"frames", nlohmann::json::array()}};
   std::size_t start = 0;
   if (opt.resume && fs::exists(checkpoint_path)) {
     Checkpoint c = read_checkpoint(checkpoint_path);
@@ -194,46 +286,79 @@ void run_track(TrackOptions opt) {
   }
   write_file_atomic(out / "profile.json", params_json.dump(2) + "\n");
 
+  // The pipeline (issue #6): while frame i is tracked on this thread, one task reads and prepares frame
+  // i+1 and another writes frame i-1, on the same TBB pool (--threads bounds all of it). At most one frame
+  // is read ahead. The tracker itself stays sequential (Algorithm 1), so the output is the same as
+  // without the pipeline, bit for bit; messages and errors of a frame come when the loop reaches it,
+  // after every frame before it is written, as they would one frame at a time.
+  auto load_params_now = [&] {
+    FrameLoadParams p = load_params;
+    p.voxel_size = tracker.frames() > 0 ? tracker.voxel_size() : params.voxel_size_factor * params.edge_length;
+    return p;
+  };
+  tbb::task_group tasks;
+  auto spawn = [&](auto&& job) {
+    if (opt.no_pipeline) job();
+    else tasks.run(std::forward<decltype(job)>(job));
+  };
+  std::optional<FrameOutput> pending;  // the last tracked frame, until it is written
+  // Written, the frame is complete (its checkpoint too): said at once, from the writing task if need be.
+  auto write_pending = [&] {
+    write_output(*pending, sink);
+    progress.frame_done(pending->index, pending->number, pending->summary, pending->json);
+  };
+  // Also after an error: the tasks finish first (an earlier frame's write error is the one to report).
+  auto drain = [&] { tasks.wait(); };
+
+  std::optional<ReadFrame> next;
+  if (start < frames.size()) next = read_frame(frames[start], load_params_now(), tracker);
+  auto last_done = Clock::now();
   for (std::size_t i = start; i < frames.size(); ++i) {
     const InputFrame& f = frames[i];
-    progress.stage(i, f.number, "reading");
-    auto t0 = Clock::now();
-    load_params.voxel_size =
-        tracker.frames() > 0 ? tracker.voxel_size() : params.voxel_size_factor * params.edge_length;
-    LoadedFrame frame = load_frame(f.path, load_params);
-    for (const auto& w : frame.report.warnings) progress.message("warning: frame " + std::to_string(f.number) + ": " + w);
-    double io_seconds = std::chrono::duration<double>(Clock::now() - t0).count();
-    progress.stage(i, f.number, "tracking");
-    const std::string name = f.path.string();
-    const FrameReport& r = frame.grid ? tracker.add_frame(*frame.grid, name) : tracker.add_frame(frame.mesh, name);
-
-    for (const auto& w : r.warnings) progress.message("warning: frame " + std::to_string(f.number) + ": " + w);
-    progress.stage(i, f.number, "writing");
-    t0 = Clock::now();
-    write_ply(out / frame_file(opt, f.number, ".ply"), output_mesh(tracker));
-    write_events(out / frame_file(opt, f.number, ".events"), tracker.events());
-    io_seconds += std::chrono::duration<double>(Clock::now() - t0).count();
-    nlohmann::json fj = frame_json(r, f.number, io_seconds);
-    fj["input"] = name;
-    if (frame.report.holes_closed > 0) {
-      fj["input_repair"] = {{"holes_closed", frame.report.holes_closed},
-                            {"hole_boundary_edges", frame.report.hole_boundary_edges},
-                            {"largest_hole", frame.report.largest_hole},
-                            {"voxel_size", frame.report.voxel_size}};
-      for (const auto& w : frame.report.warnings) fj["warnings"].push_back(w);
+    ReadFrame cur = std::move(*next);
+    next.reset();
+    if (pending) spawn(write_pending);
+    if (cur.load_error) {
+      drain();
+      progress.stage(i, f.number, "reading");
+      std::rethrow_exception(cur.load_error);
     }
-    report["frames"].push_back(fj);
-    report["edge_length"] = tracker.edge_length();
-    report["voxel_size"] = tracker.voxel_size();
-    write_file_atomic(json_path, report.dump(1) + "\n");
-    // Last: the checkpoint marks the frame complete (its files are all in place).
-    write_checkpoint(checkpoint_path, {f.number, long(i), tracker.edge_length(), tracker.voxel_size(),
-                                       tracker.mesh().clone()});
-    char summary[160];
-    std::snprintf(summary, sizeof summary, "%zu verts, %zu comps, %zu events, %.2fs", r.vertices, r.components,
-                  tracker.events().size(), r.seconds.total + io_seconds);
-    progress.frame_done(i, f.number, summary, fj.dump());
+    const bool ahead = i + 1 < frames.size() && tracker.frames() > 0;  // the voxel size is fixed
+    if (ahead) spawn([&next, &tracker, g = frames[i + 1], p = load_params_now()] { next = read_frame(g, p, tracker); });
+    progress.stage(i, f.number, "reading");
+    for (const auto& w : cur.load.warnings) progress.message("warning: frame " + std::to_string(f.number) + ": " + w);
+    progress.stage(i, f.number, "tracking");
+    const FrameReport* r = nullptr;
+    try {
+      if (cur.prepare_error) std::rethrow_exception(cur.prepare_error);
+      // Isolated: while its own parallel loops wait, this thread takes no read or write task, so the
+      // frame on the critical path is never held up by one.
+      tbb::this_task_arena::isolate([&] { r = &tracker.add_frame(std::move(cur.prepared)); });
+    } catch (...) {
+      drain();
+      throw;
+    }
+    drain();
+    pending.reset();
+    if (i + 1 < frames.size() && !ahead) next = read_frame(frames[i + 1], load_params_now(), tracker);
+
+    for (const auto& w : r->warnings) progress.message("warning: frame " + std::to_string(f.number) + ": " + w);
+    progress.stage(i, f.number, "writing");
+    const auto now = Clock::now();
+    FrameOutput& o = pending.emplace();
+    o.index = i;
+    o.number = f.number;
+    o.input = f.path.string();
+    o.mesh = output_mesh(tracker);
+    o.events = tracker.events();
+    o.checkpoint = {f.number, long(i), tracker.edge_length(), tracker.voxel_size(), tracker.mesh().clone()};
+    o.report = *r;
+    o.load = std::move(cur.load);
+    o.io_seconds = cur.io_seconds;
+    o.wall_seconds = std::chrono::duration<double>(now - last_done).count();
+    last_done = now;
   }
+  if (pending) write_pending();
   progress.finish("tracked " + std::to_string(frames.size()) + " frames into " + out.string());
 }
 
@@ -260,6 +385,8 @@ void add_track_command(CLI::App& app) {
                 "close small holes of open input surfaces through the level set (docs/robustness.md)");
   sub->add_option("--max-hole", opt->max_hole, "largest hole --close-holes closes, in voxels across (default 8)");
   sub->add_option("--name", opt->name, "output file name prefix (default: from the input)");
+  sub->add_flag("--no-pipeline", opt->no_pipeline,
+                "read, track and write one frame at a time, without overlapping them (for measurements)");
   sub->callback([opt] { run_track(*opt); });
 }
 

@@ -30,6 +30,7 @@ double Progress::eta_seconds(std::size_t done) const {
 }
 
 void Progress::stage(std::size_t index, long number, const std::string& stage) {
+  const std::lock_guard lock(mutex_);
   if (first_) {
     started_at_ = index;
     start_ = std::chrono::steady_clock::now();
@@ -54,6 +55,7 @@ void Progress::stage(std::size_t index, long number, const std::string& stage) {
 }
 
 void Progress::frame_done(std::size_t index, long number, const std::string& summary, const std::string& json) {
+  const std::lock_guard lock(mutex_);
   if (first_) {
     started_at_ = index;
     first_ = false;
@@ -72,6 +74,7 @@ void Progress::frame_done(std::size_t index, long number, const std::string& sum
 }
 
 void Progress::finish(const std::string& summary) {
+  const std::lock_guard lock(mutex_);
   if (mode_ == ProgressMode::Quiet) return;
   if (mode_ == ProgressMode::Jsonl)
     std::fprintf(out_, "%s\n", nlohmann::json{{"event", "done"}, {"summary", summary}}.dump().c_str());
@@ -80,6 +83,7 @@ void Progress::finish(const std::string& summary) {
 }
 
 void Progress::message(const std::string& text) {
+  const std::lock_guard lock(mutex_);
   if (mode_ == ProgressMode::Quiet) return;
   if (mode_ == ProgressMode::Jsonl)
     std::fprintf(out_, "%s\n", nlohmann::json{{"event", "message"}, {"text", text}}.dump().c_str());

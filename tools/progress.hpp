@@ -3,6 +3,7 @@
 //! a terminal, JSON lines for host applications, or nothing.
 #include <chrono>
 #include <cstdio>
+#include <mutex>
 #include <string>
 
 namespace topotrack::cli {
@@ -12,6 +13,7 @@ enum class ProgressMode { Auto, Bar, Lines, Jsonl, Quiet };
 //! Parses "auto", "bar", "lines", "jsonl", "quiet". \throw UsageError
 ProgressMode parse_progress_mode(const std::string& s);
 
+//! Thread-safe: every call is one whole line (or bar update) under a lock.
 class Progress {
 public:
   Progress(ProgressMode mode, std::size_t total_frames, std::FILE* out = stderr);
@@ -31,6 +33,7 @@ private:
   std::chrono::steady_clock::time_point start_;
   std::size_t started_at_ = 0;  // frames already done before this run (resume)
   bool first_ = true;
+  std::mutex mutex_;
 };
 
 }  // namespace topotrack::cli

@@ -2,6 +2,7 @@
 // following the input, determinism across thread counts, and bit-identical resume from a checkpoint.
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
+#include <tbb/task_group.h>
 
 #include <filesystem>
 #include <unordered_map>
@@ -155,6 +156,81 @@ TEST(Tracker, ResumeFromCheckpointIsBitIdentical) {
   EXPECT_EQ(rest.events[0], straight.events[2]);
   EXPECT_EQ(rest.meshes[1], straight.meshes[3]);
   EXPECT_EQ(rest.events[1], straight.events[3]);
+}
+
+//! The pipelined use of the API (what `track` does): frame n+1 prepared in a task while frame n is tracked.
+TrackRun track_pipelined(const std::vector<SurfaceMesh>& frames) {
+  Tracker tracker;
+  TrackRun run;
+  PreparedFrame next = tracker.prepare(frames[0].clone());
+  for (std::size_t i = 0; i < frames.size(); ++i) {
+    PreparedFrame cur = std::move(next);
+    tbb::task_group ahead;
+    // Before the first frame the voxel size is not known: prepare then only checks the surface.
+    const bool overlap = tracker.frames() > 0 && i + 1 < frames.size();
+    if (overlap) ahead.run([&] { next = tracker.prepare(frames[i + 1].clone()); });
+    tracker.add_frame(std::move(cur));
+    ahead.wait();
+    if (!overlap && i + 1 < frames.size()) next = tracker.prepare(frames[i + 1].clone());
+    run.meshes.push_back(encode_mesh(tracker.mesh()));
+    run.events.push_back(encode_events(tracker.events()));
+  }
+  return run;
+}
+
+TEST(Tracker, PreparedAheadGivesTheSameOutputWithOneOrTwoThreads) {
+  const auto frames = translating_peanut(4, Vec3(0.05, 0.01, -0.02));
+  TrackRun plain, one, two;
+  {
+    tbb::global_control c(tbb::global_control::max_allowed_parallelism, 1);
+    plain = track(frames);
+    one = track_pipelined(frames);
+  }
+  {
+    tbb::global_control c(tbb::global_control::max_allowed_parallelism, 2);
+    two = track_pipelined(frames);
+  }
+  ASSERT_EQ(plain.meshes.size(), frames.size());
+  ASSERT_EQ(one.meshes.size(), frames.size());
+  ASSERT_EQ(two.meshes.size(), frames.size());
+  for (std::size_t i = 0; i < frames.size(); ++i) {
+    EXPECT_EQ(one.meshes[i], plain.meshes[i]) << "frame " << i;
+    EXPECT_EQ(one.events[i], plain.events[i]) << "frame " << i;
+    EXPECT_EQ(two.meshes[i], plain.meshes[i]) << "frame " << i;
+    EXPECT_EQ(two.events[i], plain.events[i]) << "frame " << i;
+  }
+}
+
+TEST(Tracker, PrepareComputesTheTargetWorkOnceTheVoxelSizeIsKnown) {
+  const auto frames = translating_peanut(2, Vec3(0.03, 0, 0));
+  Tracker tracker;
+  const PreparedFrame early = tracker.prepare(frames[1].clone(), "early");
+  EXPECT_FALSE(early.phi) << "no voxel size before the first frame";
+  EXPECT_FALSE(early.target);
+  tracker.add_frame(frames[0]);
+  PreparedFrame p = tracker.prepare(frames[1].clone(), "second");
+  ASSERT_TRUE(p.phi);
+  ASSERT_TRUE(p.target);
+  EXPECT_EQ(p.voxel_size, tracker.voxel_size());
+  EXPECT_GT(p.seconds.signed_distance, 0);
+  EXPECT_GE(p.seconds.prepare, p.seconds.signed_distance);
+  const double phi_s_seconds = p.seconds.signed_distance;
+  const FrameReport& r = tracker.add_frame(std::move(p));
+  EXPECT_GE(r.seconds.signed_distance, phi_s_seconds) << "φ_S is counted in its frame";
+  EXPECT_GT(r.seconds.prepare, 0);
+  EXPECT_GE(r.seconds.total, r.seconds.prepare);
+}
+
+TEST(Tracker, PrepareRejectsWhatAddFrameRejects) {
+  Tracker tracker;
+  try {
+    (void)tracker.prepare(test::open_box().mesh(), "box.ply");
+    ADD_FAILURE() << "an open surface was accepted";
+  } catch (const InvalidInput& e) {
+    EXPECT_NE(std::string(e.what()).find("box.ply: not a closed 2-manifold"), std::string::npos) << e.what();
+  }
+  PreparedFrame empty = tracker.prepare(SurfaceMesh(), "nothing");
+  EXPECT_THROW(tracker.add_frame(std::move(empty)), InvalidInput);
 }
 
 TEST(Tracker, AcceptsLevelSetFrames) {
