@@ -44,7 +44,7 @@ const Pair& scene_pair(int resolution) {
   return *p;
 }
 
-void run(benchmark::State& state, bool self, SdfMethod method = SdfMethod::kAuto) {
+void run(benchmark::State& state, bool self, SdfMethod method = SdfMethod::kAuto, double half_width = 3.0) {
   const Pair& p = scene_pair(int(state.range(0)));
   ConstrainReport r;
   for (auto _ : state) {
@@ -56,6 +56,7 @@ void run(benchmark::State& state, bool self, SdfMethod method = SdfMethod::kAuto
     extract_triangles(self ? m : p.next, P, T);
     SignedDistanceParams sp;
     sp.voxel_size = p.voxel;
+    sp.half_width_voxels = half_width;
     sp.method = method;
     const openvdb::FloatGrid::Ptr theta = signed_distance(P, T, sp);
     EventList events;
@@ -153,11 +154,18 @@ void BM_ConstrainSelfMethod(benchmark::State& state) {
   run(state, true, state.range(1) == 0 ? SdfMethod::kOpenVdb : SdfMethod::kNarrowBand);
 }
 BENCHMARK(BM_ConstrainSelfMethod)->ArgsProduct({{300}, {0, 1}})->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime()->UseRealTime();
+// The same at the tracker's half width (second argument, hundredths of a voxel: 200 the profile's, 175 enough for
+// what ConstrainTopology reads); BM_ConstrainSelfMethod keeps signed_distance's default of 3.
+void BM_ConstrainSelfTracker(benchmark::State& state) {
+  run(state, true, SdfMethod::kAuto, double(state.range(1)) / 100);
+}
+BENCHMARK(BM_ConstrainSelfTracker)->ArgsProduct({{300}, {200, 175}})->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime()->UseRealTime();
 
 // The tracker's common case (Algorithm 1 lines 8-11 after alignment, issue 6's 100k frame): M is blobs frame 2
 // moved by the ground-truth rotation onto frame 3, S is frame 3 (another triangulation of the same shape), with
-// the tracker's default parameters (profiles/default.json: half width 2, exact-sign band 0.25 voxel). Almost
-// every cell is simple: what is measured is the cost of finding that out. Resolution 240: 100k vertices.
+// the tracker's default parameters (profiles/default.json: half width 2, exact-sign band 0.25 voxel), and a half
+// width of 1.75. Almost every cell is simple: what is measured is the cost of finding that out. Resolution 240:
+// 100k vertices.
 struct Matched {
   SurfaceMesh mesh, target;
   double voxel = 0;
@@ -187,7 +195,9 @@ const Matched& matched_pair(int resolution) {
 }
 void BM_TrackerTopology(benchmark::State& state) {
   const Matched& p = matched_pair(int(state.range(0)));
-  constexpr double kHalfWidth = 2.0, kExactSignBand = 0.25;
+  // Second argument: the half width in hundredths of a voxel (200: the profile's 2.0; 175: enough for what
+  // ConstrainTopology reads, corners of cells within sqrt(3) voxels of the surface).
+  const double kHalfWidth = double(state.range(1)) / 100, kExactSignBand = 0.25;
   ConstrainReport self, target;
   double sdf_s = 0;
   for (auto _ : state) {
@@ -222,7 +232,7 @@ void BM_TrackerTopology(benchmark::State& state) {
   state.counters["complex_self"] = double(self.complex_cells);
   state.counters["complex_target"] = double(target.complex_cells);
 }
-BENCHMARK(BM_TrackerTopology)->Arg(120)->Arg(240)->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime()->UseRealTime();
+BENCHMARK(BM_TrackerTopology)->Args({120, 200})->Args({240, 200})->Args({240, 175})->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime()->UseRealTime();
 
 BENCHMARK(BM_ConstrainToNextFrame)->Arg(100)->Arg(200)->Arg(300)->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime()->UseRealTime();
 BENCHMARK(BM_ConstrainSelf)->Arg(100)->Arg(200)->Arg(300)->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime()->UseRealTime();

@@ -11,6 +11,8 @@
 #include <cstdint>
 #include <vector>
 
+#include <immintrin.h>
+
 #include "io/error.hpp"
 #include "kernels/sdf/signed_distance.hpp"
 
@@ -63,6 +65,144 @@ double point_triangle_d2(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3
   }
   // Degenerate (zero-area) triangle reaching the face case through rounding: nearest of its corners.
   return std::min({ap.squaredNorm(), bp.squaredNorm(), cp.squaredNorm()});
+}
+
+// The corners and edges of a triangle as the column kernels read them.
+struct TriangleFrame {
+  Vec3 A, B, C, n, ab, ac, bc;
+  bool has_normal = false;
+  Vec3 centre;     // of the bounding ball
+  double R2 = 0;   // squared radius of the bounding ball widened by the half width
+  int lo[3], hi[3];  // its voxel box, block-relative, clipped to the block
+};
+
+// The z-range of column (x, y) of the block at `org` inside the triangle's widened ball and box.
+inline bool column_range(const TriangleFrame& t, double px, double py, int oz, int& z0, int& z1) {
+  const double rem = t.R2 - (px - t.centre.x()) * (px - t.centre.x()) - (py - t.centre.y()) * (py - t.centre.y());
+  if (rem < 0) return false;
+  const double half = std::sqrt(rem);
+  z0 = std::max(t.lo[2], int(std::ceil(t.centre.z() - half)) - oz);
+  z1 = std::min(t.hi[2], int(std::floor(t.centre.z() + half)) - oz);
+  return z0 <= z1;
+}
+
+// One column of a block: voxels (px, py, oz + z) for z in [z0, z1] against one triangle; row[z] keeps the
+// minimum squared distance (plane test, then point_triangle_d2).
+void column_scalar(const TriangleFrame& t, double px, double py, double oz, int z0, int z1, double* row) {
+  Vec3 p(px, py, 0);
+  for (int z = z0; z <= z1; ++z) {
+    p.z() = oz + z;
+    const double hp = t.n.dot(p - t.A);
+    if (hp * hp >= row[z]) continue;  // the plane is a lower bound
+    const double d = point_triangle_d2(p, t.A, t.B, t.C, t.n);
+    if (d < row[z]) row[z] = d;  // strict: ties keep the smaller triangle index
+  }
+}
+
+// The same, four voxels at a time with AVX2: every region of point_triangle_d2 is computed with the same
+// operations in the same order (no FMA: the target does not enable it, so nothing is contracted), and the
+// region is chosen by the same tests in the same priority, so each value is bit-identical to column_scalar's.
+// Helpers of column_avx2 as macros: lambdas and functions would not inherit its target.
+#define TT_DOT(ux, uy, uz, vx, vy, vz) \
+  _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(ux, vx), _mm256_mul_pd(uy, vy)), _mm256_mul_pd(uz, vz))
+#define TT_LE(u, v) _mm256_cmp_pd(u, v, _CMP_LE_OQ)
+#define TT_AND3(a, b, c) _mm256_and_pd(_mm256_and_pd(a, b), c)
+#define TT_SEL(m, yes, no) _mm256_blendv_pd(no, yes, m)
+
+__attribute__((target("avx2"), always_inline)) inline void column_avx2(const TriangleFrame& t, double px, double py,
+                                                                      double oz, int z0, int z1, double* row) {
+  const __m256d zero = _mm256_setzero_pd();
+  const __m256d abx = _mm256_set1_pd(t.ab.x()), aby = _mm256_set1_pd(t.ab.y()), abz = _mm256_set1_pd(t.ab.z());
+  const __m256d acx = _mm256_set1_pd(t.ac.x()), acy = _mm256_set1_pd(t.ac.y()), acz = _mm256_set1_pd(t.ac.z());
+  const __m256d bcx = _mm256_set1_pd(t.bc.x()), bcy = _mm256_set1_pd(t.bc.y()), bcz = _mm256_set1_pd(t.bc.z());
+  const __m256d nx = _mm256_set1_pd(t.n.x()), ny = _mm256_set1_pd(t.n.y()), nz = _mm256_set1_pd(t.n.z());
+  const __m256d apx = _mm256_set1_pd(px - t.A.x()), apy = _mm256_set1_pd(py - t.A.y());
+  const __m256d bpx = _mm256_set1_pd(px - t.B.x()), bpy = _mm256_set1_pd(py - t.B.y());
+  const __m256d cpx = _mm256_set1_pd(px - t.C.x()), cpy = _mm256_set1_pd(py - t.C.y());
+  const __m256d Az = _mm256_set1_pd(t.A.z()), Bz = _mm256_set1_pd(t.B.z()), Cz = _mm256_set1_pd(t.C.z());
+  const __m256d lane = _mm256_set_pd(3, 2, 1, 0);
+  for (int z = z0; z <= z1; z += 4) {
+    const __m256d in_range = _mm256_cmp_pd(lane, _mm256_set1_pd(double(z1 - z)), _CMP_LE_OQ);  // lanes z .. z1
+    const __m256d cur = _mm256_maskload_pd(row + z, _mm256_castpd_si256(in_range));
+    const __m256d pz = _mm256_add_pd(_mm256_set1_pd(oz + z), lane);
+    const __m256d apz = _mm256_sub_pd(pz, Az);
+    const __m256d hp = TT_DOT(nx, ny, nz, apx, apy, apz), hp2 = _mm256_mul_pd(hp, hp);
+    __m256d active = _mm256_and_pd(in_range, _mm256_cmp_pd(hp2, cur, _CMP_LT_OQ));  // the plane test
+    if (_mm256_movemask_pd(active) == 0) continue;
+    const __m256d bpz = _mm256_sub_pd(pz, Bz), cpz = _mm256_sub_pd(pz, Cz);
+    const __m256d d1 = TT_DOT(abx, aby, abz, apx, apy, apz), d2 = TT_DOT(acx, acy, acz, apx, apy, apz);
+    const __m256d d3 = TT_DOT(abx, aby, abz, bpx, bpy, bpz), d4 = TT_DOT(acx, acy, acz, bpx, bpy, bpz);
+    const __m256d d5 = TT_DOT(abx, aby, abz, cpx, cpy, cpz), d6 = TT_DOT(acx, acy, acz, cpx, cpy, cpz);
+    const __m256d ap2 = TT_DOT(apx, apy, apz, apx, apy, apz), bp2 = TT_DOT(bpx, bpy, bpz, bpx, bpy, bpz),
+                  cp2 = TT_DOT(cpx, cpy, cpz, cpx, cpy, cpz);
+    const __m256d vc = _mm256_sub_pd(_mm256_mul_pd(d1, d4), _mm256_mul_pd(d3, d2));
+    const __m256d vb = _mm256_sub_pd(_mm256_mul_pd(d5, d2), _mm256_mul_pd(d1, d6));
+    const __m256d va = _mm256_sub_pd(_mm256_mul_pd(d3, d6), _mm256_mul_pd(d5, d4));
+    const __m256d d43 = _mm256_sub_pd(d4, d3), d56 = _mm256_sub_pd(d5, d6);
+    // The face region; a degenerate triangle there gives the nearest corner (equal minima are equal bits).
+    __m256d r = t.has_normal ? hp2 : _mm256_min_pd(_mm256_min_pd(ap2, bp2), cp2);
+    // The other regions from the last to the first, so that the first whose test holds wins, as in
+    // point_triangle_d2. Edge regions: |u - s v|^2 with s = num / den, or |u|^2 when den <= 0; computed only when
+    // an active voxel is in them (the divisions are the dearest part).
+    const __m256d c6 = TT_AND3(TT_LE(va, zero), TT_LE(zero, d43), TT_LE(zero, d56));
+    if (_mm256_movemask_pd(_mm256_and_pd(c6, active))) {
+      const __m256d den = _mm256_add_pd(d43, d56), s = _mm256_div_pd(d43, den);
+      const __m256d wx = _mm256_sub_pd(bpx, _mm256_mul_pd(s, bcx)), wy = _mm256_sub_pd(bpy, _mm256_mul_pd(s, bcy)),
+                    wz = _mm256_sub_pd(bpz, _mm256_mul_pd(s, bcz));
+      const __m256d e = TT_SEL(_mm256_cmp_pd(den, zero, _CMP_GT_OQ), TT_DOT(wx, wy, wz, wx, wy, wz), bp2);
+      r = TT_SEL(c6, e, r);
+    }
+    const __m256d c5 = TT_AND3(TT_LE(vb, zero), TT_LE(zero, d2), TT_LE(d6, zero));
+    if (_mm256_movemask_pd(_mm256_and_pd(c5, active))) {
+      const __m256d den = _mm256_sub_pd(d2, d6), s = _mm256_div_pd(d2, den);
+      const __m256d wx = _mm256_sub_pd(apx, _mm256_mul_pd(s, acx)), wy = _mm256_sub_pd(apy, _mm256_mul_pd(s, acy)),
+                    wz = _mm256_sub_pd(apz, _mm256_mul_pd(s, acz));
+      const __m256d e = TT_SEL(_mm256_cmp_pd(den, zero, _CMP_GT_OQ), TT_DOT(wx, wy, wz, wx, wy, wz), ap2);
+      r = TT_SEL(c5, e, r);
+    }
+    r = TT_SEL(_mm256_and_pd(TT_LE(zero, d6), TT_LE(d5, d6)), cp2, r);
+    const __m256d c3 = TT_AND3(TT_LE(vc, zero), TT_LE(zero, d1), TT_LE(d3, zero));
+    if (_mm256_movemask_pd(_mm256_and_pd(c3, active))) {
+      const __m256d den = _mm256_sub_pd(d1, d3), s = _mm256_div_pd(d1, den);
+      const __m256d wx = _mm256_sub_pd(apx, _mm256_mul_pd(s, abx)), wy = _mm256_sub_pd(apy, _mm256_mul_pd(s, aby)),
+                    wz = _mm256_sub_pd(apz, _mm256_mul_pd(s, abz));
+      const __m256d e = TT_SEL(_mm256_cmp_pd(den, zero, _CMP_GT_OQ), TT_DOT(wx, wy, wz, wx, wy, wz), ap2);
+      r = TT_SEL(c3, e, r);
+    }
+    r = TT_SEL(_mm256_and_pd(TT_LE(zero, d3), TT_LE(d4, d3)), bp2, r);
+    r = TT_SEL(_mm256_and_pd(TT_LE(d1, zero), TT_LE(d2, zero)), ap2, r);
+    active = _mm256_and_pd(active, _mm256_cmp_pd(r, cur, _CMP_LT_OQ));  // strict, as in column_scalar
+    _mm256_maskstore_pd(row + z, _mm256_castpd_si256(active), r);
+  }
+}
+#undef TT_DOT
+#undef TT_LE
+#undef TT_AND3
+#undef TT_SEL
+
+// Every voxel of the block (d2: its 16^3 squared distances) in the triangle's widened ball and box.
+void triangle_scalar(const TriangleFrame& t, const openvdb::Coord& org, double* d2) {
+  for (int x = t.lo[0]; x <= t.hi[0]; ++x)
+    for (int y = t.lo[1]; y <= t.hi[1]; ++y) {
+      const double px = org[0] + x, py = org[1] + y;
+      int z0, z1;
+      if (column_range(t, px, py, org[2], z0, z1))
+        column_scalar(t, px, py, org[2], z0, z1, d2 + ((x << kBlockLog) + y) * kBlock);
+    }
+}
+__attribute__((target("avx2"))) void triangle_avx2(const TriangleFrame& t, const openvdb::Coord& org, double* d2) {
+  for (int x = t.lo[0]; x <= t.hi[0]; ++x)
+    for (int y = t.lo[1]; y <= t.hi[1]; ++y) {
+      const double px = org[0] + x, py = org[1] + y;
+      int z0, z1;
+      if (column_range(t, px, py, org[2], z0, z1))
+        column_avx2(t, px, py, org[2], z0, z1, d2 + ((x << kBlockLog) + y) * kBlock);
+    }
+}
+
+bool cpu_has_avx2() {
+  static const bool has = __builtin_cpu_supports("avx2");
+  return has;
 }
 
 // A triangle crossing a lattice column (x, y): the height of the crossing and its weight on the winding
@@ -261,8 +401,10 @@ openvdb::FloatGrid::Ptr narrow_band_signed_distance(std::span<const Vec3> positi
   std::vector<std::array<Leaf*, 8>> block_leaves(n_blocks);
   std::vector<std::size_t> block_active(n_blocks, 0);
   const double hw2 = hw * hw;
+  const bool simd = params.vectorized && cpu_has_avx2();
+  rep.vectorized = simd;
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n_blocks, 1), [&](const auto& r) {
-    std::vector<double> d2(kBlockVoxels);
+    std::vector<double> d2(kBlockVoxels + 4);  // padded: the AVX2 loop reads (masked) up to 3 past a column
     std::vector<std::int32_t> winding(kBlockVoxels);
     for (std::size_t b = r.begin(); b != r.end(); ++b) {
       const std::uint64_t key = pairs[block_begin[b]] >> 32;
@@ -275,38 +417,28 @@ openvdb::FloatGrid::Ptr narrow_band_signed_distance(std::span<const Vec3> positi
         const auto& t = triangles[pairs[k] & 0xffffffffu];
         openvdb::Coord b0, b1;
         voxel_box(t, b0, b1);
-        const Vec3 &A = S.Q[t[0]], &B = S.Q[t[1]], &C = S.Q[t[2]];
+        TriangleFrame tf;
+        tf.A = S.Q[t[0]], tf.B = S.Q[t[1]], tf.C = S.Q[t[2]];
+        const Vec3 &A = tf.A, &B = tf.B, &C = tf.C;
         Vec3 n = (B - A).cross(C - A);
         const double len = n.norm();
         n = len > 0 ? Vec3(n / len) : Vec3::Zero();
-        int lo3[3], hi3[3];
+        tf.n = n;
+        tf.ab = B - A, tf.ac = C - A, tf.bc = C - B;
+        tf.has_normal = n.squaredNorm() > 0;
         for (int a = 0; a < 3; ++a) {
-          lo3[a] = std::max(b0[a] - rel[a], 0);
-          hi3[a] = std::min(b1[a] - rel[a], kBlock - 1);
+          tf.lo[a] = std::max(b0[a] - rel[a], 0);
+          tf.hi[a] = std::min(b1[a] - rel[a], kBlock - 1);
         }
         // Only voxels within the half width of the triangle's bounding ball (about half of its box).
-        const Vec3 centre = (A + B + C) / 3;
+        tf.centre = (A + B + C) / 3;
+        const Vec3& centre = tf.centre;
         const double rt = std::sqrt(std::max({(A - centre).squaredNorm(), (B - centre).squaredNorm(),
                                               (C - centre).squaredNorm()}));
         const double R = rt + hw;
-        const double R2 = R * R;
-        for (int x = lo3[0]; x <= hi3[0]; ++x)
-          for (int y = lo3[1]; y <= hi3[1]; ++y) {
-            Vec3 p(org[0] + x, org[1] + y, 0);
-            const double rem = R2 - (p.x() - centre.x()) * (p.x() - centre.x()) - (p.y() - centre.y()) * (p.y() - centre.y());
-            if (rem < 0) continue;
-            const double half = std::sqrt(rem);
-            const int z0 = std::max(lo3[2], int(std::ceil(centre.z() - half)) - org[2]),
-                      z1 = std::min(hi3[2], int(std::floor(centre.z() + half)) - org[2]);
-            double* row = d2.data() + ((x << kBlockLog) + y) * kBlock;
-            for (int z = z0; z <= z1; ++z) {
-              p.z() = org[2] + z;
-              const double hp = n.dot(p - A);
-              if (hp * hp >= row[z]) continue;  // the plane is a lower bound
-              const double d = point_triangle_d2(p, A, B, C, n);
-              if (d < row[z]) row[z] = d;  // strict: ties keep the smaller triangle index
-            }
-          }
+        tf.R2 = R * R;
+        if (simd) triangle_avx2(tf, org, d2.data());
+        else triangle_scalar(tf, org, d2.data());
       }
       // Winding number of every voxel of the block from the crossings of its columns.
       for (int x = 0; x < kBlock; ++x)

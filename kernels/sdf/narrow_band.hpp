@@ -14,7 +14,10 @@
 //!  - Distance: each triangle's box, widened by the half width, is rasterised into 16^3 blocks of voxels;
 //!    every block (in parallel) keeps per voxel the minimum exact point-triangle distance over its
 //!    triangles, taken in increasing triangle order with a strict comparison, so ties go to the smaller
-//!    triangle index and the result does not depend on the thread count.
+//!    triangle index and the result does not depend on the thread count. Where the CPU has AVX2 the
+//!    distances along a column are computed four voxels at a time, branch-free, with the same operations in
+//!    the same order as the scalar loop (bit-identical, tested). bench/sdf/sdf_bench BM_NarrowBand/100000/20/{0,1}
+//!    (bumpy torus of 100k vertices, half width 2, median of 3, process CPU time, load 5): 412 -> 262 ms.
 //!  - Sign: inside where the winding number is >= 1, counted along each lattice column (x, y) from the
 //!    signed crossings of the triangles below the voxel. The column-triangle test is exact (vertices
 //!    snapped to 2^-20 voxel, 128-bit edge functions, ties broken by simulation of simplicity), so every
@@ -33,6 +36,9 @@ namespace topotrack {
 struct NarrowBandParams {
   double voxel_size = 0;           //!< required: finite, > 0
   double half_width_voxels = 3.0;  //!< active band on each side of the surface, >= 1
+  //! Compute the distances four voxels at a time with AVX2 where the CPU has it; the values are bit-identical
+  //! to the scalar loop's (tested), false forces the scalar loop.
+  bool vectorized = true;
 };
 
 struct NarrowBandReport {
@@ -41,6 +47,7 @@ struct NarrowBandReport {
   std::size_t triangle_blocks = 0;       //!< (triangle, block) pairs rasterised
   std::size_t crossings = 0;             //!< triangle-column crossings counted for the sign
   std::size_t unbalanced_columns = 0;    //!< columns whose crossings do not sum to zero: the mesh is not closed
+  bool vectorized = false;               //!< the AVX2 kernel ran
   double seconds_bin = 0, seconds_crossings = 0, seconds_blocks = 0, seconds_tree = 0;
 };
 
