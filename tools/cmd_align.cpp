@@ -37,6 +37,7 @@ TrackerParams align_params(const AlignOptions& opt) {
   if (opt.no_large_motion) {
     params.coarse_params.prealign_misfit = 0;
     params.coarse_params.coarse_pass_misfit = 0;
+    params.coarse_params.backward_weight = 0;
   }
   validate(params);
   return params;
@@ -93,6 +94,8 @@ nlohmann::json run_coarse(SurfaceMesh& mesh, const TargetSurface& target, const 
                      {"energy_end", r.energy_end},
                      {"misfit_start", r.misfit_start},
                      {"coarse_pass_iterations", r.coarse_pass_iterations},
+                     {"backward", r.backward},
+                     {"backward_all", r.backward_all},
                      {"fitted_at_start", r.fitted_at_start},
                      {"prealign", {{"applied", r.prealigned},
                                    {"iterations", r.prealign.iterations},
@@ -176,7 +179,7 @@ void add_align_command(CLI::App& app) {
                   "deformation-graph node density relative to the paper's (1, 0.5, 0.25: fast preview)")
       ->check(CLI::Range(1e-3, 1.0));
   sub->add_flag("--no-large-motion", opt->no_large_motion,
-                "the paper's coarse scheme alone: no rigid pre-alignment, no low-density first pass");
+                "the paper's coarse scheme alone: no rigid pre-alignment, no low-density first pass, no backward matches");
   sub->add_option("--sigma", opt->sigma, "fine-stage pruning distance, fraction of the bbox diagonal")
       ->check(CLI::PositiveNumber);
   sub->add_option("--profile", opt->profile, "bundled profile name or a .json file (default: the paper's values)");

@@ -4,7 +4,8 @@
 // re-meshed by improve_mesh to about 47k and 100k (the targets: coarse + fine <= 2 s and
 // <= 4 s on 2 cores); the target stays the re-sampled 42k frame. Further arguments: graph density (percent of the paper's) and
 // the cap on PCG iterations per Gauss–Newton round (100: the former default, 15: the current one), and
-// whether the large-motion stages run (rigid pre-alignment and low-density pass, by their misfit tests).
+// whether the large-motion stages run (rigid pre-alignment, low-density pass and backward matches, by
+// their misfit tests).
 // Counters: vertices, nodes, rounds, PCG iterations and the seconds of graph, correspondences,
 // assembly, factorisation and solve (coarse) and ray casting, assembly and solve (fine). "CPU" is the
 // process CPU time (all threads); the machine's load inflates "Time" (wall clock), so compare rows of
@@ -60,9 +61,10 @@ void BM_AlignCoarseFine(benchmark::State& state) {
   CoarseParams params;
   params.graph_density = double(state.range(1)) / 100.0;
   params.max_pcg_iterations = int(state.range(3));
-  if (state.range(4) == 0) {  // the paper's scheme alone: no rigid pre-alignment, no low-density pass
+  if (state.range(4) == 0) {  // the paper's scheme alone: no rigid pre-alignment, no low-density pass, no backward matches
     params.prealign_misfit = 0;
     params.coarse_pass_misfit = 0;
+    params.backward_weight = 0;
   }
   CoarseReport c;
   FineReport fr;
@@ -83,6 +85,7 @@ void BM_AlignCoarseFine(benchmark::State& state) {
   state.counters["coarse_s"] = c.seconds_total;
   state.counters["coarse_prealign_s"] = c.seconds_prealign;
   state.counters["coarse_pass_rounds"] = c.coarse_pass_iterations;
+  state.counters["backward"] = c.backward + c.backward_all;  // 0 off, 1 pruned nodes, 2 every node
   state.counters["coarse_graph_s"] = c.seconds_graph;
   state.counters["coarse_corr_s"] = c.seconds_correspondences;
   state.counters["coarse_assembly_s"] = c.seconds_assembly;
@@ -218,6 +221,7 @@ void BM_TrackerStep(benchmark::State& state) {
   state.counters["nodes"] = c.nodes;
   state.counters["rounds"] = c.iterations;
   state.counters["coarse_pass_rounds"] = c.coarse_pass_iterations;
+  state.counters["backward"] = c.backward + c.backward_all;  // 0 off, 1 pruned nodes, 2 every node
   state.counters["pcg_iterations"] = c.pcg_iterations;
   state.counters["coarse_s"] = c.seconds_total;
   state.counters["coarse_prealign_s"] = c.seconds_prealign;

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
 
 #include "kernels/mesh/mesh_queries.hpp"
 #include "kernels/registration/block_cholesky.hpp"
@@ -31,6 +32,7 @@ struct NodeState {
 
 struct Weights {
   double fit_point, fit_plane, rigid, smooth, damping_A, damping_b;
+  double backward;  // weight of the backward correspondences relative to the forward ones
 };
 
 struct Problem {
@@ -98,14 +100,26 @@ struct Energy {
   double total = 0, fit = 0;  // fit: alpha_point |r|^2 + alpha_plane <n, r>^2 in relative units, unweighted by alpha_fit
 };
 
-Energy evaluate_energy(const Problem& p, const std::vector<NodeState>& s, const std::vector<Correspondence>& corr,
+// Forward correspondences of the nodes and (possibly empty) backward ones (see Weights::backward).
+struct NodeMatches {
+  const std::vector<Correspondence>& forward;
+  const std::vector<Correspondence>& backward;
+};
+
+double node_fit_energy(const Vec3& x, const NodeMatches& m, std::size_t j, const Weights& w) {
+  double f = fit_energy(x, m.forward[j], w);
+  if (!m.backward.empty()) f += w.backward * fit_energy(x, m.backward[j], w);
+  return f;
+}
+
+Energy evaluate_energy(const Problem& p, const std::vector<NodeState>& s, const NodeMatches& corr,
                        const Weights& w, double fit_scale) {
   const DeformationGraph& g = p.graph;
   const std::size_t nn = g.n_nodes();
   std::vector<double> total(nn), fit(nn);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nn, 64), [&](const auto& r) {
     for (std::size_t j = r.begin(); j != r.end(); ++j) {
-      const double f = fit_energy(g.node_position[j] + s[j].b, corr[j], w);
+      const double f = node_fit_energy(g.node_position[j] + s[j].b, corr, j, w);
       double e = f + w.rigid * rigid_energy(s[j].A);
       for (Index q = g.neighbor_offset[j]; q < g.neighbor_offset[j + 1]; ++q) {
         const Index k = g.neighbors[q];
@@ -189,7 +203,7 @@ struct NodeSystem {
 // Fill the gradient g = J^T r and either the lower triangle of H (`full`, the direct path) or the node
 // blocks with the per-coordinate matrix (`nodes`, `precond`: the PCG path) for the current state; each
 // node writes its own columns and entries, so the result does not depend on the scheduling.
-void assemble(const Problem& p, const std::vector<NodeState>& s, const std::vector<Correspondence>& corr,
+void assemble(const Problem& p, const std::vector<NodeState>& s, const NodeMatches& corr,
               const Weights& w, SystemPattern* full, SystemPattern* precond, NodeSystem* nodes, Eigen::VectorXd& grad) {
   const DeformationGraph& g = p.graph;
   const std::size_t nn = g.n_nodes();
@@ -231,13 +245,15 @@ void assemble(const Problem& p, const std::vector<NodeState>& s, const std::vect
         }
       }
       // E_fit at the node: point-to-point and point-to-plane.
-      if (corr[j].valid()) {
-        const Vec3 r = gpos + s[j].b - corr[j].point;
-        const Vec3& n = corr[j].normal;
-        const Mat3 W = w.fit_point * Mat3::Identity() + w.fit_plane * n * n.transpose();
+      auto add_fit = [&](const Correspondence& c, double scale) {
+        if (!c.valid()) return;
+        const Vec3 r = gpos + s[j].b - c.point;
+        const Mat3 W = scale * (w.fit_point * Mat3::Identity() + w.fit_plane * c.normal * c.normal.transpose());
         D.block<3, 3>(9, 9) += W;
         gj.tail<3>() += W * r;
-      }
+      };
+      add_fit(corr.forward[j], 1);
+      if (!corr.backward.empty()) add_fit(corr.backward[j], w.backward);
       // E_smooth over both directed edges j->k and k->j.
       for (Index q = g.neighbor_offset[j]; q < g.neighbor_offset[j + 1]; ++q) {
         const Index k = g.neighbors[q];
@@ -397,7 +413,9 @@ CoarseReport align_coarse(SurfaceMesh& mesh, const TargetSurface& target, const 
       !(params.damping > 0) || !(params.step_tolerance >= 0) || !(params.fit_tolerance >= 0) ||
       !(params.stall_ratio >= 0) || !(params.prealign_misfit >= 0) || params.closest_point_levels < 0 ||
       !(params.coarse_pass_misfit >= 0) || !(params.coarse_pass_density > 0) || params.coarse_pass_density > 1 ||
-      !(params.coarse_pass_alpha_reg_min > 0))
+      !(params.coarse_pass_alpha_reg_min > 0) || !(params.backward_weight >= 0) || !(params.backward_misfit >= 0) ||
+      !(params.backward_all_misfit >= 0) ||
+      params.backward_samples_per_node < 1)
     TT_THROW(InvalidInput, "align_coarse: invalid parameters");
   if (params.prealign_misfit > 0 || params.coarse_pass_misfit > 0) validate(params.prealign);
   if (mesh.n_vertices() == 0 || mesh.n_faces() == 0) TT_THROW(InvalidInput, "align_coarse: empty mesh");
@@ -407,12 +425,20 @@ CoarseReport align_coarse(SurfaceMesh& mesh, const TargetSurface& target, const 
   auto t0 = Clock::now();
   const double edge = mean_edge_length(mesh);
   bool large_motion = false;
-  if (params.prealign_misfit > 0 || params.coarse_pass_misfit > 0) {
+  // Backward correspondences (target -> nodes) for large motion: for the nodes whose forward match is
+  // pruned, or for every node (`backward_all`); always when their misfit threshold is 0.
+  bool backward = params.backward_weight > 0 && params.backward_misfit == 0;
+  bool backward_all = backward && params.backward_all_misfit == 0;
+  if (params.prealign_misfit > 0 || params.coarse_pass_misfit > 0 || params.backward_misfit > 0) {
     rep.misfit_start = trimmed_mean_distance(mesh, target, params.prealign) / target.bbox_diagonal();
     large_motion = params.prealign_misfit > 0 && rep.misfit_start > params.prealign_misfit;
+    backward = backward || (params.backward_weight > 0 && rep.misfit_start > params.backward_misfit);
+    backward_all = backward_all || (backward && rep.misfit_start > params.backward_all_misfit);
     if (large_motion) {
       rep.prealign = align_rigid(mesh, target, params.prealign);
       rep.prealigned = rep.prealign.applied;
+      if (params.observer && rep.prealigned)
+        params.observer(CoarseSnapshot{CoarseStage::Prealigned, 0, rep.prealign.iterations, 0, mesh.positions()});
     }
     if (params.coarse_pass_misfit > 0 && rep.misfit_start > params.coarse_pass_misfit) {
       CoarseParams pass = params;
@@ -420,9 +446,19 @@ CoarseReport align_coarse(SurfaceMesh& mesh, const TargetSurface& target, const 
       pass.alpha_reg_min = params.coarse_pass_alpha_reg_min;
       pass.prealign_misfit = 0;
       pass.coarse_pass_misfit = 0;
+      pass.backward_misfit = 0;
+      pass.backward_all_misfit = backward_all ? 0 : std::numeric_limits<double>::infinity();
+      if (!backward) pass.backward_weight = 0;
+      if (params.observer)
+        pass.observer = [&](CoarseSnapshot snap) {
+          snap.stage = CoarseStage::LowDensityLevel;
+          params.observer(snap);
+        };
       rep.coarse_pass_iterations = align_coarse(mesh, target, pass).iterations;
     }
   }
+  rep.backward = backward;
+  rep.backward_all = backward_all;
   rep.seconds_prealign = seconds_since(t0);
   // Relative units: the scene's bounding-box diagonal is 1 (§4.2), after the pre-alignment.
   BoundingBox scene = bounding_box(mesh);
@@ -497,7 +533,9 @@ CoarseReport align_coarse(SurfaceMesh& mesh, const TargetSurface& target, const 
 
   std::vector<NodeState> state(nn), trial(nn);
   std::vector<Vec3> node_x(nn), node_n(nn);
-  std::vector<Correspondence> corr;
+  std::vector<Correspondence> corr, back;
+  const TargetSamples samples =
+      backward ? sample_target(target, std::size_t(params.backward_samples_per_node) * nn) : TargetSamples{};
   Eigen::VectorXd grad;
   double alpha_reg = params.alpha_reg_start;
   int level_iterations = 0;
@@ -517,6 +555,10 @@ CoarseReport align_coarse(SurfaceMesh& mesh, const TargetSurface& target, const 
     });
     cparams.closest_point = large_motion && rep.levels <= params.closest_point_levels;
     corr = find_correspondences(target, node_x, node_n, cparams);
+    if (backward) back = find_backward_correspondences(samples, node_x, node_n, params.max_normal_angle_deg);
+    if (backward && !backward_all)
+      for (std::size_t j = 0; j < nn; ++j)
+        if (corr[j].valid()) back[j] = Correspondence{};
     rep.seconds_correspondences += seconds_since(t0);
     const CorrespondenceCounts counts = count_correspondences(corr);
     rep.correspondences = counts.ok;
@@ -531,15 +573,17 @@ CoarseReport align_coarse(SurfaceMesh& mesh, const TargetSurface& target, const 
                     alpha_reg,
                     alpha_reg * params.smooth_weight * inv_d2,
                     params.damping,
-                    params.damping * inv_d2};
+                    params.damping * inv_d2,
+                    params.backward_weight};
+    const NodeMatches matches{corr, back};
     const double fit_scale = params.alpha_fit > 0 ? 1.0 / params.alpha_fit : 0.0;
-    const Energy before = evaluate_energy(problem, state, corr, w, fit_scale);
+    const Energy before = evaluate_energy(problem, state, matches, w, fit_scale);
     if (first) {
       rep.energy_start = before.total;
       rep.fit_start = before.fit;
       first = false;
     }
-    assemble(problem, state, corr, w, direct ? &pattern : nullptr, direct ? nullptr : &precond,
+    assemble(problem, state, matches, w, direct ? &pattern : nullptr, direct ? nullptr : &precond,
              direct ? nullptr : &node_system, grad);
     rep.seconds_assembly += seconds_since(t0);
     if (direct || refactor || params.refactor_each_round) {
@@ -587,7 +631,7 @@ CoarseReport align_coarse(SurfaceMesh& mesh, const TargetSurface& target, const 
         const Mat3 R = Eigen::AngleAxisd(t * angle, spin[j] / angle).toRotationMatrix();
         trial[j].A = R * state[j].A + t * (dA - W * state[j].A);
       }
-      const Energy e = evaluate_energy(problem, trial, corr, w, fit_scale);
+      const Energy e = evaluate_energy(problem, trial, matches, w, fit_scale);
       if (e.total <= before.total) {
         after = e;
         state.swap(trial);
@@ -622,6 +666,14 @@ CoarseReport align_coarse(SurfaceMesh& mesh, const TargetSurface& target, const 
                            before.total - after.total <= params.convergence_tolerance * before.total ||
                            motion <= params.step_tolerance * edge || motion < params.stall_ratio * fit_distance;
     if (converged || level_iterations >= per_level) {
+      if (params.observer) {
+        std::vector<Vec3> skinned = mesh.positions();
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, skinned.size(), 1024), [&](const auto& r) {
+          for (std::size_t v = r.begin(); v != r.end(); ++v)
+            if (!mesh.is_deleted(Vertex(Index(v)))) skinned[v] = skin(problem, state, Index(v));
+        });
+        params.observer(CoarseSnapshot{CoarseStage::Level, alpha_reg, level_iterations, fit_distance / edge, skinned});
+      }
       if (converged && fit_distance <= params.fit_tolerance * edge) break;
       alpha_reg /= 10;
       level_iterations = 0;

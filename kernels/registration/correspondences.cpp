@@ -3,8 +3,11 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
+
+#include "kernels/spatial/point_index.hpp"
 
 namespace topotrack {
 
@@ -49,6 +52,77 @@ std::vector<Correspondence> find_correspondences(const TargetSurface& target, st
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, x.size(), 128), [&](const auto& r) {
     for (std::size_t i = r.begin(); i != r.end(); ++i) out[i] = find_correspondence(target, x[i], n[i], params);
   });
+  return out;
+}
+
+TargetSamples sample_target(const TargetSurface& target, std::size_t max_samples) {
+  TargetSamples s;
+  const auto& P = target.positions();
+  const auto& T = target.triangles();
+  const std::size_t stride = max_samples > 0 ? std::max<std::size_t>(1, (T.size() + max_samples - 1) / max_samples) : 1;
+  for (std::size_t f = 0; f < T.size(); f += stride) {
+    const Vec3& a = P[T[f][0]];
+    const Vec3& b = P[T[f][1]];
+    const Vec3& c = P[T[f][2]];
+    const double area = 0.5 * (b - a).cross(c - a).norm();
+    if (!(area > 0)) continue;
+    s.point.push_back((a + b + c) / 3.0);
+    s.normal.push_back(target.face_normal(Index(f)));
+    s.area.push_back(area);
+  }
+  return s;
+}
+
+std::vector<Correspondence> find_backward_correspondences(const TargetSamples& samples, std::span<const Vec3> x,
+                                                          std::span<const Vec3> n, double max_normal_angle_deg,
+                                                          int candidates) {
+  if (x.size() != n.size())
+    TT_THROW(InvalidInput, "find_backward_correspondences: " << x.size() << " points but " << n.size() << " normals");
+  if (candidates < 1) TT_THROW(InvalidInput, "find_backward_correspondences: candidates must be at least 1");
+  std::vector<Correspondence> out(x.size());
+  if (x.empty()) return out;
+  const PointIndex index(x);
+  const double cos_max = max_normal_angle_deg < 180 ? std::cos(max_normal_angle_deg * std::numbers::pi / 180.0) : -2.0;
+  const std::size_t ns = samples.point.size();
+  std::vector<Index> match(ns, kInvalidIndex);
+  auto compatible = [&](Index j, std::size_t i) {
+    const double len = n[j].norm();
+    return len > 0 && n[j].dot(samples.normal[i]) >= cos_max * len;
+  };
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, ns, 256), [&](const auto& r) {
+    for (std::size_t i = r.begin(); i != r.end(); ++i) {
+      const PointIndex::Neighbor q = index.nearest(samples.point[i]);
+      if (compatible(q.index, i)) {
+        match[i] = q.index;
+        continue;
+      }
+      if (candidates < 2) continue;
+      for (const PointIndex::Neighbor& c : index.k_nearest(samples.point[i], std::size_t(candidates)))
+        if (compatible(c.index, i)) {
+          match[i] = c.index;
+          break;
+        }
+    }
+  });
+  std::vector<double> weight(x.size(), 0);
+  for (std::size_t i = 0; i < ns; ++i) {
+    const Index j = match[i];
+    if (j == kInvalidIndex) continue;
+    out[j].point += samples.area[i] * samples.point[i];
+    out[j].normal += samples.area[i] * samples.normal[i];
+    weight[j] += samples.area[i];
+  }
+  for (std::size_t j = 0; j < x.size(); ++j) {
+    const double len = out[j].normal.norm();
+    if (!(weight[j] > 0) || !(len > 0)) {
+      out[j] = Correspondence{};
+      continue;
+    }
+    out[j].point /= weight[j];
+    out[j].normal /= len;
+    out[j].distance = (x[j] - out[j].point).norm();
+    out[j].status = CorrespondenceStatus::Ok;
+  }
   return out;
 }
 

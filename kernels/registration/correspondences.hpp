@@ -45,6 +45,25 @@ Correspondence find_correspondence(const TargetSurface& target, const Vec3& x, c
 std::vector<Correspondence> find_correspondences(const TargetSurface& target, std::span<const Vec3> x,
                                                  std::span<const Vec3> n, const CorrespondenceParams& params = {});
 
+//! The target sampled for the backward (target -> source) correspondences: its triangles' centroids,
+//! unit normals and areas (degenerate triangles left out), in triangle order; every k-th triangle
+//! when there are more than `max_samples` (0: all).
+struct TargetSamples {
+  std::vector<Vec3> point, normal;
+  std::vector<double> area;
+};
+TargetSamples sample_target(const TargetSurface& target, std::size_t max_samples = 0);
+
+//! Backward correspondences (our addition for large motion, the target -> source half of a symmetric
+//! ICP): each target sample is matched to the nearest of the points x (the deformed graph nodes)
+//! whose normal is within max_normal_angle_deg of its own (among the `candidates` nearest); node j's
+//! correspondence is the area-weighted mean point and normal of the samples matched to it (NoHit when
+//! none). A part of the target that no forward ray reaches (a limb that swung away) thus pulls the
+//! nearest compatible nodes. Deterministic: matches in parallel, sums in sample order.
+std::vector<Correspondence> find_backward_correspondences(const TargetSamples& samples, std::span<const Vec3> x,
+                                                          std::span<const Vec3> n, double max_normal_angle_deg,
+                                                          int candidates = 8);
+
 //! Counts per status of a list of correspondences.
 struct CorrespondenceCounts {
   std::size_t ok = 0, no_hit = 0, normal_angle = 0, too_far = 0;

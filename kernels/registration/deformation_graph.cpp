@@ -93,10 +93,30 @@ void bounded_dijkstra(const Adjacency& adj, Index source, double radius, Dijkstr
   s.touched.clear();
 }
 
+// Multi-source bounded Dijkstra: lower the geodesic distance field `dist` (kInf where unreached) from
+// the vertices queued, settling no vertex beyond `limit` (inclusive). `dist` persists across calls, so
+// repeated calls grow one field from more and more sources.
+void grow_distances(const Adjacency& adj, double limit, std::vector<double>& dist, MinQueue& queue) {
+  while (!queue.empty()) {
+    const auto [d, u] = queue.top();
+    queue.pop();
+    if (d > dist[u]) continue;
+    for (Index i = adj.offset[u]; i < adj.offset[u + 1]; ++i) {
+      const Index w = adj.target[i];
+      const double nd = d + adj.length[i];
+      if (nd <= limit && nd < dist[w]) {
+        dist[w] = nd;
+        queue.push({nd, w});
+      }
+    }
+  }
+}
+
 // Geodesic Poisson-disk sampling: visit vertices in handle order and make each vertex farther than
-// `spacing` from every node so far a node; coverage grows by bounded multi-source Dijkstra.
+// `spacing` from every node so far a node (coverage: distances strictly below `spacing`).
 std::vector<Vertex> sample_nodes(const SurfaceMesh& mesh, const Adjacency& adj, double spacing) {
   const std::size_t nv = mesh.vertices_size();
+  const double below_spacing = std::nextafter(spacing, 0.0);
   std::vector<double> dist(nv, kInf);
   std::vector<Vertex> nodes;
   MinQueue queue;
@@ -105,19 +125,7 @@ std::vector<Vertex> sample_nodes(const SurfaceMesh& mesh, const Adjacency& adj, 
     nodes.push_back(Vertex(v));
     dist[v] = 0;
     queue.push({0.0, v});
-    while (!queue.empty()) {
-      const auto [d, u] = queue.top();
-      queue.pop();
-      if (d > dist[u]) continue;
-      for (Index i = adj.offset[u]; i < adj.offset[u + 1]; ++i) {
-        const Index w = adj.target[i];
-        const double nd = d + adj.length[i];
-        if (nd < spacing && nd < dist[w]) {
-          dist[w] = nd;
-          queue.push({nd, w});
-        }
-      }
-    }
+    grow_distances(adj, below_spacing, dist, queue);
   }
   return nodes;
 }
@@ -203,19 +211,7 @@ DeformationGraph build_deformation_graph(const SurfaceMesh& mesh, std::vector<Ve
         queue.push({0.0, v});
       }
     if (!queue.empty()) {
-      while (!queue.empty()) {
-        const auto [d, u] = queue.top();
-        queue.pop();
-        if (d > dist[u]) continue;
-        for (Index i = adj.offset[u]; i < adj.offset[u + 1]; ++i) {
-          const Index w = adj.target[i];
-          const double nd = d + adj.length[i];
-          if (nd <= radius && nd < dist[w]) {
-            dist[w] = nd;
-            queue.push({nd, w});
-          }
-        }
-      }
+      grow_distances(adj, radius, dist, queue);
       std::vector<Index> again;
       for (std::size_t j = 0; j < nn; ++j)
         if (dist[g.node_vertex[j].idx] <= radius) again.push_back(Index(j));

@@ -3,9 +3,12 @@
 //! so vertex i of frame k corresponds to vertex i of frame k + gap. The target is frame k + gap
 //! re-sampled (different connectivity) so that the aligner never sees the correspondence.
 //! Header-only; shared by the registration tests and benchmark.
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <limits>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -14,6 +17,7 @@
 #include "kernels/mesh/mesh_convert.hpp"
 #include "kernels/mesh/mesh_queries.hpp"
 #include "kernels/raycast/target_surface.hpp"
+#include "kernels/spatial/point_index.hpp"
 
 namespace topotrack::test {
 
@@ -74,6 +78,118 @@ inline AlignmentError alignment_error(const SurfaceMesh& mesh, const std::vector
     e.mean_target /= double(n) * diagonal;
   }
   return e;
+}
+
+
+//! Where the error of an alignment is (diagnostics of the registration issue), over live vertices:
+//! the ground-truth error's distribution, and three failure modes told apart: "off" vertices are not
+//! on the target (distance > 1% of the diagonal); "slid" ones are on it (< 0.5%) yet more than 2% from
+//! their ground truth; of those, "wrong part" ones land nearest to the ground truth of a vertex that
+//! was more than 10% of the diagonal away from them in the source (another limb, not a slide along
+//! their own). Fractions of the live vertices; lengths in % of the diagonal.
+struct ErrorBreakdown {
+  double mean = 0, median = 0, p90 = 0, mean_target = 0;
+  double off = 0, slid = 0, wrong_part = 0;
+};
+
+//! Per-vertex ground-truth error (fraction of the diagonal) of positions `x` (by handle index).
+inline std::vector<double> truth_errors(std::span<const Vec3> x, const std::vector<Vec3>& truth, double diagonal) {
+  std::vector<double> e(std::min(x.size(), truth.size()));
+  for (std::size_t i = 0; i < e.size(); ++i) e[i] = (x[i] - truth[i]).norm() / diagonal;
+  return e;
+}
+
+inline ErrorBreakdown error_breakdown(std::span<const Vec3> x, const AlignmentPair& pair, const TargetSurface& target,
+                                      const PointIndex& truth_index) {
+  ErrorBreakdown b;
+  const std::vector<double> err = truth_errors(x, pair.truth, pair.diagonal);
+  std::vector<double> sorted;
+  std::size_t n = 0, off = 0, slid = 0, wrong = 0;
+  for (std::size_t i = 0; i < err.size(); ++i) {
+    if (pair.source.is_deleted(Vertex(Index(i)))) continue;
+    ++n;
+    sorted.push_back(err[i]);
+    b.mean += err[i];
+    const double dt = target.closest_point(x[i]).distance / pair.diagonal;
+    b.mean_target += dt;
+    if (dt > 0.01) ++off;
+    else if (dt < 0.005 && err[i] > 0.02) {
+      ++slid;
+      const Index j = truth_index.nearest(x[i]).index;
+      if ((pair.source.positions()[j] - pair.source.positions()[i]).norm() > 0.1 * pair.diagonal) ++wrong;
+    }
+  }
+  if (!n) return b;
+  std::sort(sorted.begin(), sorted.end());
+  b.mean *= 100.0 / double(n);
+  b.mean_target *= 100.0 / double(n);
+  b.median = 100 * sorted[n / 2];
+  b.p90 = 100 * sorted[std::min(n - 1, n * 9 / 10)];
+  b.off = double(off) / double(n);
+  b.slid = double(slid) / double(n);
+  b.wrong_part = double(wrong) / double(n);
+  return b;
+}
+
+inline void print_breakdown(const char* stage, const ErrorBreakdown& b) {
+  std::printf("    %-22s truth %% mean %7.3f median %7.3f p90 %7.3f | to target %6.3f %% | off %4.1f%% slid %4.1f%% "
+              "(wrong part %4.1f%%)\n",
+              stage, b.mean, b.median, b.p90, b.mean_target, 100 * b.off, 100 * b.slid, 100 * b.wrong_part);
+}
+
+//! The source split into `parts` clusters by k-means on its positions (deterministic: farthest-point
+//! seeds from vertex 0, 10 Lloyd steps); the cluster of each vertex, by handle index.
+inline std::vector<int> body_parts(const SurfaceMesh& source, int parts) {
+  const auto& P = source.positions();
+  std::vector<Vec3> c{P[0]};
+  std::vector<double> d(P.size(), std::numeric_limits<double>::infinity());
+  while (int(c.size()) < parts) {
+    std::size_t far = 0;
+    for (std::size_t i = 0; i < P.size(); ++i) {
+      d[i] = std::min(d[i], (P[i] - c.back()).squaredNorm());
+      if (d[i] > d[far]) far = i;
+    }
+    c.push_back(P[far]);
+  }
+  std::vector<int> label(P.size(), 0);
+  for (int it = 0; it < 10; ++it) {
+    std::vector<Vec3> sum(c.size(), Vec3::Zero());
+    std::vector<int> count(c.size(), 0);
+    for (std::size_t i = 0; i < P.size(); ++i) {
+      int best = 0;
+      for (int k = 1; k < int(c.size()); ++k)
+        if ((P[i] - c[k]).squaredNorm() < (P[i] - c[best]).squaredNorm()) best = k;
+      label[i] = best;
+      sum[best] += P[i];
+      ++count[best];
+    }
+    for (std::size_t k = 0; k < c.size(); ++k)
+      if (count[k]) c[k] = sum[k] / count[k];
+  }
+  return label;
+}
+
+//! Mean ground-truth error (% of the diagonal) per body part, with each part's centre in the source's
+//! bounding box (0..1 per axis) so that the part can be named.
+inline void print_parts(std::span<const Vec3> x, const AlignmentPair& pair, const std::vector<int>& label) {
+  const std::vector<double> err = truth_errors(x, pair.truth, pair.diagonal);
+  const BoundingBox box = bounding_box(pair.source);
+  const int parts = 1 + *std::max_element(label.begin(), label.end());
+  std::vector<double> sum(parts, 0);
+  std::vector<Vec3> centre(parts, Vec3::Zero());
+  std::vector<int> count(parts, 0);
+  for (std::size_t i = 0; i < err.size(); ++i) {
+    sum[label[i]] += err[i];
+    centre[label[i]] += pair.source.positions()[i];
+    ++count[label[i]];
+  }
+  std::printf("    parts (centre in the source bbox: error %%):");
+  for (int k = 0; k < parts; ++k) {
+    if (!count[k]) continue;
+    const Vec3 u = (centre[k] / count[k] - box.min).cwiseQuotient(box.max - box.min);
+    std::printf(" (%.2f %.2f %.2f: %.2f)", u.x(), u.y(), u.z(), 100 * sum[k] / count[k]);
+  }
+  std::printf("\n");
 }
 
 }  // namespace topotrack::test

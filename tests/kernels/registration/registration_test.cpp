@@ -218,6 +218,44 @@ TEST(Correspondences, ClosestPointMode) {
   EXPECT_EQ(find_correspondence(target, Vec3(0, 0.9, 0), Vec3(0, 1, 0), closest).status, CorrespondenceStatus::NoHit);
 }
 
+// The target -> node matches of large motion: each target sample goes to its nearest node with a
+// compatible normal; a node's match is the area-weighted mean of its samples.
+TEST(Correspondences, BackwardMatches) {
+  const test::Soup s = test::icosphere(5);
+  const TargetSurface target(s.positions, s.triangles);
+  const TargetSamples all = sample_target(target);
+  EXPECT_EQ(all.point.size(), target.n_triangles());
+  double area = 0;
+  for (double a : all.area) area += a;
+  EXPECT_NEAR(area, 4 * std::numbers::pi, 0.02);
+  EXPECT_LE(sample_target(target, 1000).point.size(), 1000u);
+  EXPECT_GE(sample_target(target, 1000).point.size(), 900u);
+  // Two nodes above the poles, both facing up: the north one takes the cap within 60 degrees of its
+  // normal (y >= 0.5: mean y 0.75 on the unit sphere, area-uniform in y); the south one no sample (its
+  // nearest samples face down, and so do all within reach of its normal).
+  const std::vector<Vec3> x{Vec3(0, 1.2, 0), Vec3(0, -1.2, 0)};
+  std::vector<Vec3> n{Vec3(0, 1, 0), Vec3(0, 2, 0)};
+  std::vector<Correspondence> c = find_backward_correspondences(all, x, n, 60);
+  ASSERT_EQ(c.size(), 2u);
+  EXPECT_EQ(c[0].status, CorrespondenceStatus::Ok);
+  EXPECT_NEAR(c[0].point.y(), 0.75, 0.01);
+  EXPECT_NEAR(c[0].point.x(), 0, 0.01);
+  EXPECT_NEAR(c[0].normal.y(), 1, 1e-9);
+  EXPECT_NEAR(c[0].distance, 0.45, 0.01);
+  EXPECT_EQ(c[1].status, CorrespondenceStatus::NoHit);
+  // Facing down, the south node takes the south cap.
+  n[1] = Vec3(0, -1, 0);
+  c = find_backward_correspondences(all, x, n, 60);
+  EXPECT_EQ(c[1].status, CorrespondenceStatus::Ok);
+  EXPECT_NEAR(c[1].point.y(), -0.75, 0.01);
+  // Without the normal test every sample goes to its nearest node: the hemispheres, mean |y| 0.5.
+  c = find_backward_correspondences(all, x, std::vector<Vec3>{Vec3(0, 1, 0), Vec3(0, 1, 0)}, 180);
+  EXPECT_NEAR(c[0].point.y(), 0.5, 0.01);
+  EXPECT_NEAR(c[1].point.y(), -0.5, 0.01);
+  EXPECT_THROW(find_backward_correspondences(all, x, std::vector<Vec3>{Vec3(0, 1, 0)}, 60), InvalidInput);
+  EXPECT_THROW(find_backward_correspondences(all, x, n, 60, 0), InvalidInput);
+}
+
 // --- coarse + fine -------------------------------------------------------------------------------
 
 TEST(Alignment, RigidRotationIsRecovered) {
@@ -258,6 +296,7 @@ TEST(Alignment, LargeMotionIsPreAligned) {
   const CoarseReport cr = align_coarse(with.source, with.target);
   EXPECT_GT(cr.misfit_start, CoarseParams{}.prealign_misfit);
   EXPECT_TRUE(cr.prealigned);
+  EXPECT_TRUE(cr.backward_all);  // the misfit also calls for the backward matches at every node
   EXPECT_LT(cr.prealign.distance_end, 0.1 * cr.prealign.distance_start);
   align_fine(with.source, with.target);
   CoarseParams off;
@@ -283,6 +322,7 @@ TEST(Alignment, SmallMotionIsNotPreAligned) {
   EXPECT_GT(cr.misfit_start, 0);
   EXPECT_LT(cr.misfit_start, CoarseParams{}.prealign_misfit);
   EXPECT_FALSE(cr.prealigned);
+  EXPECT_FALSE(cr.backward_all);
   EXPECT_EQ(cr.prealign.iterations, 0);
 }
 
@@ -466,6 +506,13 @@ TEST(Alignment, BadParametersThrow) {
   p = CoarseParams{};
   p.closest_point_levels = -1;
   EXPECT_THROW(align_coarse(c.source, c.target, p), InvalidInput);
+  for (auto bad : {+[](CoarseParams& q) { q.backward_weight = -1; }, +[](CoarseParams& q) { q.backward_misfit = -1; },
+                   +[](CoarseParams& q) { q.backward_all_misfit = -1; },
+                   +[](CoarseParams& q) { q.backward_samples_per_node = 0; }}) {
+    p = CoarseParams{};
+    bad(p);
+    EXPECT_THROW(align_coarse(c.source, c.target, p), InvalidInput);
+  }
   SurfaceMesh empty;
   EXPECT_THROW(align_coarse(empty, c.target), InvalidInput);
 }
