@@ -68,6 +68,10 @@ std::vector<Binding> bindings(TrackerParams& p) {
       {"coarse.coarse_pass_alpha_reg_min", &p.coarse_params.coarse_pass_alpha_reg_min, 1e-12, inf},
       {"coarse.max_iterations_per_level_after_pass", &p.coarse_params.max_iterations_per_level_after_pass, 1, 1e6},
       {"coarse.closest_point_levels", &p.coarse_params.closest_point_levels, 0, 16},
+      {"coarse.backward_weight", &p.coarse_params.backward_weight, 0, inf},
+      {"coarse.backward_misfit", &p.coarse_params.backward_misfit, 0, 1},
+      {"coarse.backward_all_misfit", &p.coarse_params.backward_all_misfit, 0, inf},
+      {"coarse.backward_samples_per_node", &p.coarse_params.backward_samples_per_node, 1, 1e6},
       // Speed between consecutive frames (our additions, kernels/registration/coarse.hpp).
       {"coarse.retract_rotations", &p.coarse_params.retract_rotations},
       {"coarse.check_fit_first", &p.coarse_params.check_fit_first},
@@ -78,6 +82,7 @@ std::vector<Binding> bindings(TrackerParams& p) {
       {"fine.max_cg_iterations", &p.fine_params.max_cg_iterations, 1, 1e7},
       {"fine.tolerance", &p.fine_params.tolerance, 0, 1},
       {"fine.rounds", &p.fine_params.rounds, 1, 100},
+      {"fine.normal_displacement", &p.fine_params.normal_displacement},
       {"topology.max_region_growth", &p.constrain.max_region_growth, 0, 64},
   };
 }

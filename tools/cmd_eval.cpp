@@ -1,11 +1,13 @@
 // topotrack eval OUT --input INPUT [--ground-truth GT]: per-frame quality of a tracked sequence against its
 // input (distance, topology, closedness, triangle quality, resampling) and, with ground truth, the drift
-// of tracked points. JSON, a one-line summary and PNG plots.
+// of tracked points. JSON (with where the Hausdorff distance is attained), a one-line summary, PNG plots
+// and, with --per-vertex, a CSV per frame of each vertex's drift and distance (to find where they come from).
 #include <cmath>
 #include <cstdio>
 #include <iostream>
 #include <map>
 #include <nlohmann/json.hpp>
+#include <unordered_map>
 #include <unordered_set>
 
 #include "io/atomic_file.hpp"
@@ -36,7 +38,7 @@ namespace fs = std::filesystem;
 using json = nlohmann::json;
 
 struct EvalOptions {
-  std::string out, input, ground_truth, json_out, plots, markdown;
+  std::string out, input, ground_truth, json_out, plots, markdown, per_vertex;
   bool quiet = false;
 };
 
@@ -112,6 +114,24 @@ void write_plot(const fs::path& dir, const std::string& name, std::vector<PlotSe
   write_png(dir / name, line_plot(series, p));
 }
 
+//! --per-vertex: one CSV per frame, a row per live vertex of the output: its id, the frame it first
+//! appeared in, position, drift and distance to the input surface (fractions of the input's diagonal;
+//! drift nan where unknown). For finding where drift and distance come from.
+void write_per_vertex(const fs::path& dir, long frame, const SurfaceMesh& tracked, const SurfaceMesh& input, double diag,
+                      const std::unordered_map<VertexId, long>& born, const std::vector<double>& drift) {
+  const auto pos = live_positions(tracked);
+  const auto ids = live_ids(tracked);
+  const auto hits = TargetSurface::from_mesh(input).closest_points(pos);
+  std::string text = "id,born,x,y,z,drift,distance\n";
+  char buf[256];
+  for (std::size_t i = 0; i < ids.size(); ++i) {
+    std::snprintf(buf, sizeof buf, "%lld,%ld,%.7g,%.7g,%.7g,%.6g,%.6g\n", static_cast<long long>(ids[i]), born.at(ids[i]),
+                  pos[i][0], pos[i][1], pos[i][2], i < drift.size() ? drift[i] : NAN, hits[i].distance / diag);
+    text += buf;
+  }
+  write_file_atomic(dir / ("vertices." + std::to_string(frame) + ".csv"), text);
+}
+
 void run_eval(const EvalOptions& opt) {
   const FrameSequence out = find_frames(opt.out);
   std::map<long, fs::path> inputs;
@@ -121,6 +141,8 @@ void run_eval(const EvalOptions& opt) {
   json frames = json::array();
   IdTable material(3);  // frame-1 positions carried forward through the events (§4.6)
   std::unordered_set<VertexId> previous_ids;
+  std::unordered_map<VertexId, long> born;  // id -> first frame it appears in (for --per-vertex)
+  if (!opt.per_vertex.empty()) ensure_directory(opt.per_vertex);
   std::unique_ptr<TargetSurface> gt_first;
   Eigen::Matrix3d R_first = Eigen::Matrix3d::Identity();
   long first_number = -1;
@@ -159,7 +181,11 @@ void run_eval(const EvalOptions& opt) {
     fj["vertices"] = tracked.n_vertices();
     fj["triangles"] = tracked.n_faces();
     const SurfaceDistance d = surface_distance(tracked, input);
-    fj["distance"] = {{"mean", d.mean() / diag}, {"hausdorff", d.hausdorff() / diag}, {"unit", "fraction of bbox diagonal"}};
+    const bool from_output = d.a_to_b.max >= d.b_to_a.max;  // where the Hausdorff distance is attained
+    const Vec3 h_at = from_output ? d.a_to_b.max_point : d.b_to_a.max_point;
+    fj["distance"] = {{"mean", d.mean() / diag}, {"hausdorff", d.hausdorff() / diag}, {"unit", "fraction of bbox diagonal"},
+                      {"hausdorff_at", {h_at[0], h_at[1], h_at[2]}},
+                      {"hausdorff_from", from_output ? "output" : "input"}};
     worst_mean = std::max(worst_mean, d.mean() / diag);
     worst_hausdorff = std::max(worst_hausdorff, d.hausdorff() / diag);
     const SoupStats so = analyze_soup(to_mesh_data(tracked, false));
@@ -182,6 +208,7 @@ void run_eval(const EvalOptions& opt) {
     std::size_t fresh = 0;
     std::unordered_set<VertexId> now(ids.begin(), ids.end());
     for (VertexId id : ids) fresh += k > 0 && !previous_ids.count(id);
+    for (VertexId id : ids) born.emplace(id, of.number);
     std::size_t removed = 0;
     for (VertexId id : previous_ids) removed += !now.count(id);
     const double ns = ids.empty() ? 0 : double(fresh) / double(ids.size());
@@ -194,6 +221,7 @@ void run_eval(const EvalOptions& opt) {
     previous_ids = std::move(now);
 
     double drift = NAN;
+    std::vector<double> per_vertex_drift;
     if (!gt.empty()) {
       std::vector<float> mat;
       const std::vector<float> none(3, NAN);
@@ -222,6 +250,15 @@ void run_eval(const EvalOptions& opt) {
           have = true;
         }
       }
+      if (have && !opt.per_vertex.empty()) {
+        std::vector<double> vd(ids.size(), NAN);
+        for (std::size_t i = 0, j = 0; i < ids.size(); ++i)
+          if (std::isfinite(mat[3 * i])) {
+            vd[i] = (tracked_p[j] - expected[j]).norm() / diag;
+            ++j;
+          }
+        per_vertex_drift = std::move(vd);
+      }
       if (have) {
         const DriftStats ds = drift_stats(tracked_p, expected);
         fj["drift"] = {{"points", ds.points}, {"mean", ds.mean / diag}, {"median", ds.median / diag},
@@ -230,6 +267,7 @@ void run_eval(const EvalOptions& opt) {
         drift = ds.mean / diag;
       }
     }
+    if (!opt.per_vertex.empty()) write_per_vertex(opt.per_vertex, of.number, tracked, input, diag, born, per_vertex_drift);
     xs.push_back(double(of.number));
     dist_mean.push_back(100 * d.mean() / diag);
     dist_haus.push_back(100 * d.hausdorff() / diag);
@@ -319,6 +357,8 @@ void add_eval_command(CLI::App& app) {
   sub->add_option("-o,--json", opt->json_out, "write the per-frame results as JSON");
   sub->add_option("--plots", opt->plots, "write PNG plots (distance, resampling, drift, seconds) into this folder");
   sub->add_option("--markdown", opt->markdown, "also print a Markdown table row for this run, labelled LABEL");
+  sub->add_option("--per-vertex", opt->per_vertex,
+                  "write a CSV per frame into this folder: id, first frame, position, drift, distance to the input");
   sub->add_flag("--quiet", opt->quiet, "no summary line (prints the JSON when -o is not given)");
   sub->callback([opt] { run_eval(*opt); });
 }

@@ -12,11 +12,16 @@ DistanceStats one_sided_distance(std::span<const Vec3> points, const TargetSurfa
   if (points.empty()) return s;
   const auto hits = to.closest_points(points);
   double sum = 0, sum2 = 0;  // summed in index order: deterministic
-  for (const auto& h : hits) {
-    sum += h.distance;
-    sum2 += h.distance * h.distance;
-    s.max = std::max(s.max, h.distance);
+  for (std::size_t i = 0; i < hits.size(); ++i) {
+    const double d = hits[i].distance;
+    sum += d;
+    sum2 += d * d;
+    if (d > s.max) {
+      s.max = d;
+      s.max_index = i;
+    }
   }
+  s.max_point = points[s.max_index];
   s.mean = sum / double(points.size());
   s.rms = std::sqrt(sum2 / double(points.size()));
   return s;

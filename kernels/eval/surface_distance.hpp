@@ -11,6 +11,8 @@ namespace topotrack {
 struct DistanceStats {
   std::size_t samples = 0;
   double mean = 0, rms = 0, max = 0;
+  std::size_t max_index = 0;  //!< the point farthest from `to` (the first of equal ones)
+  Vec3 max_point = Vec3::Zero();  //!< that point
 };
 
 //! Distance from each point to its closest point on `to` (parallel, deterministic).

@@ -70,13 +70,19 @@ Adjacency build_adjacency(const SurfaceMesh& mesh) {
   return a;
 }
 
+template <int K>
+using VecK = Eigen::Matrix<double, K, 1>;
+
+// The normal equations of E_tot: (W + smooth L) d = W (c - x), W the fit weights, L the graph Laplacian
+// of the mesh edges; K = 3 for vector displacements, K = 1 for scalar displacements along the normals.
+template <int K>
 struct System {
   const Adjacency& adj;
   std::vector<double> fit;  // w_i: fit weight where a correspondence exists, else 0
   double smooth = 1;
 
-  Vec3 apply(const std::vector<Vec3>& d, std::size_t i) const {
-    Vec3 out = fit[i] * d[i];
+  VecK<K> apply(const std::vector<VecK<K>>& d, std::size_t i) const {
+    VecK<K> out = fit[i] * d[i];
     for (Index q = adj.offset[i]; q < adj.offset[i + 1]; ++q) out += smooth * (d[i] - d[adj.neighbor[q]]);
     return out;
   }
@@ -85,6 +91,111 @@ struct System {
     return dg > 0 ? dg : 1.0;
   }
 };
+
+template <int K, class F>
+VecK<K> deterministic_sum_k(std::size_t n, F&& term) {
+  if constexpr (K == 3) {
+    return deterministic_sum(n, term);
+  } else {
+    const Vec3 s = deterministic_sum(n, [&](std::size_t i) { return Vec3(term(i)[0], 0, 0); });
+    return VecK<K>(s[0]);
+  }
+}
+
+struct CgResult {
+  int iterations = 0;
+  double residual = 0;
+};
+
+// Jacobi-preconditioned CG on the K coordinates at once (same matrix, independent scalars); d holds the
+// warm start on entry and the solution on exit.
+template <int K>
+CgResult solve_cg(const System<K>& sys, const std::vector<VecK<K>>& rhs, std::vector<VecK<K>>& d, int max_iterations,
+                  double tolerance) {
+  const std::size_t nv = rhs.size();
+  std::vector<VecK<K>> r(nv), z(nv), p(nv), Ap(nv);
+  parallel_each(nv, [&](std::size_t i) {
+    r[i] = rhs[i] - sys.apply(d, i);
+    z[i] = r[i] / sys.diagonal(i);
+    p[i] = z[i];
+  });
+  const VecK<K> rhs_norm2 = deterministic_sum_k<K>(nv, [&](std::size_t i) { return VecK<K>(rhs[i].cwiseAbs2()); });
+  VecK<K> rz = deterministic_sum_k<K>(nv, [&](std::size_t i) { return VecK<K>(r[i].cwiseProduct(z[i])); });
+  VecK<K> r_norm2 = deterministic_sum_k<K>(nv, [&](std::size_t i) { return VecK<K>(r[i].cwiseAbs2()); });
+  auto relative = [&](const VecK<K>& rn2) {
+    double worst = 0;
+    for (int c = 0; c < K; ++c) worst = std::max(worst, rhs_norm2[c] > 0 ? std::sqrt(rn2[c] / rhs_norm2[c]) : 0.0);
+    return worst;
+  };
+  CgResult res;
+  while (res.iterations < max_iterations && relative(r_norm2) > tolerance) {
+    parallel_each(nv, [&](std::size_t i) { Ap[i] = sys.apply(p, i); });
+    const VecK<K> pAp = deterministic_sum_k<K>(nv, [&](std::size_t i) { return VecK<K>(p[i].cwiseProduct(Ap[i])); });
+    VecK<K> alpha;
+    for (int c = 0; c < K; ++c) alpha[c] = pAp[c] > 0 ? rz[c] / pAp[c] : 0.0;
+    parallel_each(nv, [&](std::size_t i) {
+      d[i] += alpha.cwiseProduct(p[i]);
+      r[i] -= alpha.cwiseProduct(Ap[i]);
+      z[i] = r[i] / sys.diagonal(i);
+    });
+    const VecK<K> rz_new = deterministic_sum_k<K>(nv, [&](std::size_t i) { return VecK<K>(r[i].cwiseProduct(z[i])); });
+    r_norm2 = deterministic_sum_k<K>(nv, [&](std::size_t i) { return VecK<K>(r[i].cwiseAbs2()); });
+    VecK<K> beta;
+    for (int c = 0; c < K; ++c) beta[c] = rz[c] > 0 ? rz_new[c] / rz[c] : 0.0;
+    rz = rz_new;
+    parallel_each(nv, [&](std::size_t i) { p[i] = z[i] + beta.cwiseProduct(p[i]); });
+    ++res.iterations;
+  }
+  res.residual = relative(r_norm2);
+  return res;
+}
+
+// One round for displacements with K coordinates: K = 3, d_i in R^3; K = 1, d_i = t_i n_i.
+template <int K>
+void solve_round(SurfaceMesh& mesh, const Adjacency& adj, const std::vector<Vec3>& normals,
+                 const std::vector<Correspondence>& corr, const FineParams& params, FineReport& rep) {
+  const std::size_t nv = mesh.vertices_size();
+  auto& pos = mesh.positions();
+  auto t0 = Clock::now();
+  System<K> sys{adj, std::vector<double>(nv, 0.0), params.smooth_weight};
+  std::vector<VecK<K>> rhs(nv), d(nv);
+  auto target_of = [&](std::size_t i) -> VecK<K> {  // the displacement that reaches c_i
+    const Vec3 g = corr[i].point - pos[i];
+    if constexpr (K == 3) return g;
+    else return VecK<K>(normals[i].dot(g));
+  };
+  auto lift = [&](const VecK<K>& v, std::size_t i) -> Vec3 {  // displacement in R^3
+    if constexpr (K == 3) return v;
+    else return v[0] * normals[i];
+  };
+  parallel_each(nv, [&](std::size_t i) {
+    const bool ok = corr[i].valid() && !mesh.is_deleted(Vertex(Index(i)));
+    sys.fit[i] = ok ? params.fit_weight : 0.0;
+    d[i] = ok ? target_of(i) : VecK<K>::Zero();  // warm start
+    rhs[i] = sys.fit[i] * d[i];
+  });
+  auto energy = [&](const std::vector<VecK<K>>& disp) {
+    return deterministic_sum(nv, [&](std::size_t i) {
+      double e = sys.fit[i] > 0 ? sys.fit[i] * (pos[i] + lift(disp[i], i) - corr[i].point).squaredNorm() : 0.0;
+      for (Index q = adj.offset[i]; q < adj.offset[i + 1]; ++q)
+        e += 0.5 * sys.smooth * (disp[i] - disp[adj.neighbor[q]]).squaredNorm();
+      return Vec3(e, 0, 0);
+    })[0];
+  };
+  rep.energy_start = energy(std::vector<VecK<K>>(nv, VecK<K>::Zero()));
+  rep.seconds_assembly += seconds_since(t0);
+
+  t0 = Clock::now();
+  const CgResult cg = solve_cg<K>(sys, rhs, d, params.max_cg_iterations, params.tolerance);
+  rep.cg_iterations += cg.iterations;
+  rep.residual = cg.residual;
+  rep.energy_end = energy(d);
+  parallel_each(nv, [&](std::size_t i) {
+    const Vec3 step = lift(d[i], i);
+    if (!mesh.is_deleted(Vertex(Index(i))) && step.allFinite()) pos[i] += step;
+  });
+  rep.seconds_solve += seconds_since(t0);
+}
 
 }  // namespace
 
@@ -111,82 +222,19 @@ FineReport align_fine(SurfaceMesh& mesh, const TargetSurface& target, const Fine
   cparams.max_closest_ratio = std::numeric_limits<double>::infinity();
   cparams.max_distance = params.sigma * D;  // "sigma = 0.1 given a scene bounding box diagonal of 1"
 
-  auto& pos = mesh.positions();
-  std::vector<Vec3> rhs(nv), d(nv), r(nv), z(nv), p(nv), Ap(nv);
+  const auto& pos = mesh.positions();
   for (int round = 0; round < params.rounds; ++round) {
     t0 = Clock::now();
     const std::vector<Vec3> normals = vertex_normals(mesh);
     const std::vector<Correspondence> corr = find_correspondences(target, pos, normals, cparams);
     rep.seconds_raycast += seconds_since(t0);
-
-    t0 = Clock::now();
-    System sys{adj, std::vector<double>(nv, 0.0), params.smooth_weight};
     std::size_t matched = 0;
     for (std::size_t i = 0; i < nv; ++i)
       if (corr[i].valid() && !mesh.is_deleted(Vertex(Index(i)))) ++matched;
     rep.correspondences = matched;
     rep.pruned = mesh.n_vertices() - matched;
-    parallel_each(nv, [&](std::size_t i) {
-      const bool ok = corr[i].valid() && !mesh.is_deleted(Vertex(Index(i)));
-      sys.fit[i] = ok ? params.fit_weight : 0.0;
-      rhs[i] = ok ? Vec3(params.fit_weight * (corr[i].point - pos[i])) : Vec3::Zero();
-      d[i] = ok ? Vec3(corr[i].point - pos[i]) : Vec3::Zero();  // warm start
-    });
-    auto energy = [&](const std::vector<Vec3>& disp) {
-      return deterministic_sum(nv, [&](std::size_t i) {
-        double e = sys.fit[i] > 0 ? sys.fit[i] * (pos[i] + disp[i] - corr[i].point).squaredNorm() : 0.0;
-        for (Index q = adj.offset[i]; q < adj.offset[i + 1]; ++q)
-          e += 0.5 * sys.smooth * (disp[i] - disp[adj.neighbor[q]]).squaredNorm();
-        return Vec3(e, 0, 0);
-      })[0];
-    };
-    {
-      std::vector<Vec3> zero(nv, Vec3::Zero());
-      rep.energy_start = energy(zero);
-    }
-    rep.seconds_assembly += seconds_since(t0);
-
-    // Preconditioned CG on the three coordinates at once (same matrix, independent scalars).
-    t0 = Clock::now();
-    parallel_each(nv, [&](std::size_t i) {
-      r[i] = rhs[i] - sys.apply(d, i);
-      z[i] = r[i] / sys.diagonal(i);
-      p[i] = z[i];
-    });
-    const Vec3 rhs_norm2 = deterministic_sum(nv, [&](std::size_t i) { return Vec3(rhs[i].cwiseAbs2()); });
-    Vec3 rz = deterministic_sum(nv, [&](std::size_t i) { return Vec3(r[i].cwiseProduct(z[i])); });
-    Vec3 r_norm2 = deterministic_sum(nv, [&](std::size_t i) { return Vec3(r[i].cwiseAbs2()); });
-    auto relative = [&](const Vec3& rn2) {
-      double worst = 0;
-      for (int c = 0; c < 3; ++c) worst = std::max(worst, rhs_norm2[c] > 0 ? std::sqrt(rn2[c] / rhs_norm2[c]) : 0.0);
-      return worst;
-    };
-    int iterations = 0;
-    while (iterations < params.max_cg_iterations && relative(r_norm2) > params.tolerance) {
-      parallel_each(nv, [&](std::size_t i) { Ap[i] = sys.apply(p, i); });
-      const Vec3 pAp = deterministic_sum(nv, [&](std::size_t i) { return Vec3(p[i].cwiseProduct(Ap[i])); });
-      Vec3 alpha;
-      for (int c = 0; c < 3; ++c) alpha[c] = pAp[c] > 0 ? rz[c] / pAp[c] : 0.0;
-      parallel_each(nv, [&](std::size_t i) {
-        d[i] += alpha.cwiseProduct(p[i]);
-        r[i] -= alpha.cwiseProduct(Ap[i]);
-        z[i] = r[i] / sys.diagonal(i);
-      });
-      const Vec3 rz_new = deterministic_sum(nv, [&](std::size_t i) { return Vec3(r[i].cwiseProduct(z[i])); });
-      r_norm2 = deterministic_sum(nv, [&](std::size_t i) { return Vec3(r[i].cwiseAbs2()); });
-      Vec3 beta;
-      for (int c = 0; c < 3; ++c) beta[c] = rz[c] > 0 ? rz_new[c] / rz[c] : 0.0;
-      rz = rz_new;
-      parallel_each(nv, [&](std::size_t i) { p[i] = z[i] + beta.cwiseProduct(p[i]); });
-      ++iterations;
-    }
-    rep.cg_iterations += iterations;
-    rep.residual = relative(r_norm2);
-    rep.energy_end = energy(d);
-    parallel_each(nv, [&](std::size_t i) {
-      if (!mesh.is_deleted(Vertex(Index(i))) && d[i].allFinite()) pos[i] += d[i];
-    });
-    rep.seconds_solve += seconds_since(t0);
+    if (params.normal_displacement) solve_round<1>(mesh, adj, normals, corr, params, rep);
+    else solve_round<3>(mesh, adj, normals, corr, params, rep);
   }
   rep.seconds_total = seconds_since(t_total);
   return rep;

@@ -28,6 +28,22 @@ TEST(SurfaceDistance, ZeroForTheSameSurfaceAndTheGapForAnOffsetOne) {
   EXPECT_LT(bump.mean(), 0.01);
 }
 
+// Where the Hausdorff distance is attained: the tip of the bump, seen from the bumped surface's side.
+TEST(SurfaceDistance, LocatesTheFarthestPoint) {
+  const SurfaceMesh a = test::icosphere(3, 1.0).mesh();
+  test::Soup s = test::icosphere(3, 1.0);
+  s.positions[7] *= 1.5;
+  const SurfaceDistance d = surface_distance(a, s.mesh());
+  EXPECT_GT(d.b_to_a.max, d.a_to_b.max);
+  EXPECT_EQ(d.b_to_a.max_point, s.positions[7]);
+  EXPECT_EQ(d.b_to_a.max_index, 7u);  // samples are the vertices first
+  EXPECT_NEAR(d.b_to_a.max, 0.5, 0.05);
+  const std::vector<Vec3> pts = {Vec3(0, 0, 1.2), Vec3(0, 0, 3), Vec3(0, 0, 0.9)};
+  const DistanceStats o = one_sided_distance(pts, TargetSurface::from_mesh(a));
+  EXPECT_EQ(o.max_index, 1u);
+  EXPECT_EQ(o.max_point, pts[1]);
+}
+
 TEST(SurfaceDistance, RejectsEmptyMeshes) {
   const SurfaceMesh a = test::icosphere(1).mesh();
   EXPECT_THROW(surface_distance(a, SurfaceMesh()), InvalidInput);
