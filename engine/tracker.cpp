@@ -1,9 +1,9 @@
 #include "engine/tracker.hpp"
 
-#include <openvdb/tree/LeafManager.h>
-
 #include <chrono>
+#include <utility>
 
+#include "engine/agree_near_surface.hpp"
 #include "io/error.hpp"
 #include "kernels/mesh/mesh_convert.hpp"
 #include "kernels/mesh/mesh_queries.hpp"
@@ -32,25 +32,6 @@ IdField positions_by_id(const SurfaceMesh& m) {
     for (int c = 0; c < 3; ++c) f.values.push_back(float(m.position(v)[c]));
   }
   return f;
-}
-
-//! Where φ_S and φ_M disagree in sign at a lattice node that both surfaces pass within `tolerance` of,
-//! take φ_M's value: M and S are then the same surface up to the alignment error there, and the sign
-//! flip would only make ConstrainTopology(M, φ_S) resample an aligned region (the strict cell test of
-//! §4.3 compares edge crossings exactly). Topology differences larger than the tolerance are untouched.
-//! Per voxel, parallel over leaf nodes, deterministic.
-void agree_near_surface(openvdb::FloatGrid& phi_s, const openvdb::FloatGrid& phi_m, double tolerance) {
-  const float tol = float(tolerance);
-  openvdb::tree::LeafManager<openvdb::FloatTree> leaves(phi_s.tree());
-  leaves.foreach([&](openvdb::FloatTree::LeafNodeType& leaf, std::size_t) {
-    auto acc = phi_m.getConstAccessor();
-    for (auto it = leaf.beginValueOn(); it; ++it) {
-      const float s = *it;
-      if (std::abs(s) >= tol) continue;
-      const float m = acc.getValue(it.getCoord());
-      if (std::abs(m) < tol && ((s < 0) != (m < 0))) it.setValue(m);
-    }
-  });
 }
 
 }  // namespace
