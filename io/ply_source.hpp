@@ -82,6 +82,20 @@ struct Position {
   std::uint64_t record = 0;
 };
 
+//! What both sources say when the data ends inside the element at `at`.
+inline std::string truncated_message(const Position& at) {
+  return "truncated data: file ends in element '" + at.element->name + "' (record " + std::to_string(at.record) +
+         " of " + std::to_string(at.element->count) + ")";
+}
+
+//! A list's element count from either source: an integer, never negative.
+template <class Source>
+std::uint64_t read_list_count(Source& source, PlyScalar t) {
+  const std::int64_t n = source.integer(t);
+  if (n < 0) source.fail("negative list count " + std::to_string(n));
+  return static_cast<std::uint64_t>(n);
+}
+
 template <bool Swap>
 class BinarySource {
 public:
@@ -94,10 +108,7 @@ public:
     TT_THROW(InvalidInput, name_ << ": byte " << offset << ": " << what);
   }
   [[noreturn]] void fail(const std::string& what) const { fail_at(last_, what); }
-  [[noreturn]] void truncated(std::size_t offset) const {
-    fail_at(offset, "truncated data: file ends in element '" + at.element->name + "' (record " +
-                        std::to_string(at.record) + " of " + std::to_string(at.element->count) + ")");
-  }
+  [[noreturn]] void truncated(std::size_t offset) const { fail_at(offset, truncated_message(at)); }
 
   std::size_t remaining() const { return size_ - pos_; }
   std::size_t offset() const { return pos_; }
@@ -110,11 +121,7 @@ public:
     if (!load_int<Swap>(take(ply_scalar_size(t)), t, v)) fail("value is not an integer in int64 range");
     return v;
   }
-  std::uint64_t list_count(PlyScalar t) {
-    const std::int64_t n = integer(t);
-    if (n < 0) fail("negative list count " + std::to_string(n));
-    return static_cast<std::uint64_t>(n);
-  }
+  std::uint64_t list_count(PlyScalar t) { return read_list_count(*this, t); }
   void skip(PlyScalar t, std::uint64_t n) {
     const std::size_t s = ply_scalar_size(t);
     if (n > remaining() / s) truncated(size_);
@@ -171,11 +178,7 @@ public:
     if (!text::parse_int(q, tok_end_, v) || q != tok_end_ || !in_range(v, t)) bad_token(t);
     return v;
   }
-  std::uint64_t list_count(PlyScalar t) {
-    const std::int64_t n = integer(t);
-    if (n < 0) fail("negative list count " + std::to_string(n));
-    return static_cast<std::uint64_t>(n);
-  }
+  std::uint64_t list_count(PlyScalar t) { return read_list_count(*this, t); }
   void skip(PlyScalar t, std::uint64_t n) {
     if (n > remaining()) truncated();
     for (std::uint64_t i = 0; i < n; ++i) scalar(t);
@@ -201,10 +204,7 @@ private:
   [[noreturn]] void bad_token(PlyScalar t) const {
     fail("bad " + std::string(to_string(t)) + " value '" + text::printable(std::string_view(tok_, static_cast<std::size_t>(tok_end_ - tok_))) + "'");
   }
-  [[noreturn]] void truncated() const {
-    fail("truncated data: file ends in element '" + at.element->name + "' (record " +
-         std::to_string(at.record) + " of " + std::to_string(at.element->count) + ")");
-  }
+  [[noreturn]] void truncated() const { fail(truncated_message(at)); }
   void skip_space() {
     while (p_ < end_ && text::is_space_or_newline(*p_)) {
       if (*p_ == '\n') ++line_;

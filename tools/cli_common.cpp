@@ -1,5 +1,7 @@
 #include "tools/cli_common.hpp"
 #include <algorithm>
+#include <cctype>
+#include <iostream>
 
 #include "io/error.hpp"
 #include "io/mesh_reader.hpp"
@@ -23,6 +25,32 @@ std::vector<InputFrame> resolve_inputs(const std::vector<std::string>& inputs, s
     if (warnings) warnings->insert(warnings->end(), seq.warnings.begin(), seq.warnings.end());
   }
   return frames;
+}
+
+std::vector<InputFrame> resolve_frames(const std::vector<std::string>& inputs) {
+  std::vector<std::string> warnings;
+  std::vector<InputFrame> frames = resolve_inputs(inputs, &warnings);
+  for (const auto& w : warnings) std::cerr << "topotrack: warning: " << w << "\n";
+  if (frames.empty()) TT_THROW(InvalidInput, "no frames");
+  return frames;
+}
+
+std::vector<TrackedFrame> resolve_tracked_frames(const std::vector<std::string>& inputs) {
+  std::vector<fs::path> paths;
+  std::vector<long> numbers;
+  for (const auto& f : resolve_frames(inputs)) {
+    paths.push_back(f.path);
+    numbers.push_back(f.number);
+  }
+  return tracked_frames(paths, numbers);
+}
+
+std::string sequence_name(const fs::path& first) {
+  std::string s = first.stem().string();
+  while (!s.empty() && (std::isdigit(static_cast<unsigned char>(s.back())) || s.back() == '.' || s.back() == '_' ||
+                        s.back() == '-'))
+    s.pop_back();
+  return s.empty() ? "frame" : s;
 }
 
 MeshData load_mesh_data(const fs::path& path) { return read_mesh(path); }

@@ -7,6 +7,7 @@
 
 #include "io/mesh_data.hpp"
 #include "kernels/mesh/surface_mesh.hpp"
+#include "kernels/propagate/tracked_sequence.hpp"
 
 namespace topotrack::cli {
 
@@ -19,6 +20,16 @@ struct InputFrame {
 //! Each input is a mesh file, or a folder, glob or frame pattern of a sequence (io/sequence.hpp).
 //! Sequence warnings (gaps, mixed formats) are appended to `warnings`.
 std::vector<InputFrame> resolve_inputs(const std::vector<std::string>& inputs, std::vector<std::string>* warnings);
+
+//! resolve_inputs with the warnings printed to stderr ("topotrack: warning: ..."), as every subcommand
+//! reports them. \throw InvalidInput "no frames" when nothing is found.
+std::vector<InputFrame> resolve_frames(const std::vector<std::string>& inputs);
+
+//! The frames of a tracked sequence (resolve_frames, then each frame's events file next to it).
+std::vector<TrackedFrame> resolve_tracked_frames(const std::vector<std::string>& inputs);
+
+//! The sequence name for output files: the first frame's stem without its frame number ("blobs.0001" -> "blobs").
+std::string sequence_name(const std::filesystem::path& first);
 
 //! Read a mesh file (OBJ or PLY).
 MeshData load_mesh_data(const std::filesystem::path& path);

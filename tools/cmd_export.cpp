@@ -1,8 +1,6 @@
 // topotrack export FRAMES -o OUT: for hosts that demand a fixed vertex count, every stretch of frames with
 // constant connectivity becomes a base mesh plus a PC2 point cache (Blender's Mesh Cache modifier reads it).
-#include <cctype>
 #include <cstdio>
-#include <iostream>
 #include <nlohmann/json.hpp>
 
 #include "io/atomic_file.hpp"
@@ -26,24 +24,13 @@ struct ExportOptions {
   bool quiet = false;
 };
 
-std::string sequence_name(const fs::path& first) {
-  std::string s = first.stem().string();
-  while (!s.empty() && (std::isdigit(static_cast<unsigned char>(s.back())) || s.back() == '.' || s.back() == '_' ||
-                        s.back() == '-'))
-    s.pop_back();
-  return s.empty() ? "frame" : s;
-}
-
 struct Stretch {
   std::size_t begin = 0, end = 0;  // frame indices [begin, end)
 };
 
 void run_export(const ExportOptions& opt) {
   if (opt.format != "obj" && opt.format != "ply") TT_THROW(UsageError, "--format must be obj or ply");
-  std::vector<std::string> warnings;
-  const auto frames = resolve_inputs(opt.inputs, &warnings);
-  for (const auto& w : warnings) std::cerr << "topotrack: warning: " << w << "\n";
-  if (frames.empty()) TT_THROW(InvalidInput, "no frames");
+  const auto frames = resolve_frames(opt.inputs);
   const fs::path out(opt.out);
   ensure_directory(out);
 

@@ -57,9 +57,7 @@ std::string status(const SoupStats& s) {
 }
 
 void run_info(const InfoOptions& opt) {
-  std::vector<std::string> warnings;
-  const auto frames = resolve_inputs(opt.inputs, &warnings);
-  for (const auto& w : warnings) std::cerr << "topotrack: warning: " << w << "\n";
+  const auto frames = resolve_frames(opt.inputs);
   nlohmann::json all = nlohmann::json::array();
   if (!opt.json)
     std::printf("%-28s %9s %9s %5s %6s %5s  %-24s %10s %30s %8s %6s\n", "file", "vertices", "triangles", "comp",

@@ -2,7 +2,6 @@
 // (§4.6) forward and/or backward from a frame; colour and displacement maps and the colour morph of §5.
 #include <chrono>
 #include <cstdio>
-#include <iostream>
 #include <sstream>
 
 #include "io/error.hpp"
@@ -164,17 +163,7 @@ void run_propagate(const PropagateOptions& opt) {
     TT_THROW(UsageError, "give exactly one of -o OUT and --in-place");
   if (opt.direction != "forward" && opt.direction != "backward" && opt.direction != "both")
     TT_THROW(UsageError, "--direction must be forward, backward or both");
-  std::vector<std::string> warnings;
-  const auto inputs = resolve_inputs(opt.inputs, &warnings);
-  for (const auto& w : warnings) std::cerr << "topotrack: warning: " << w << "\n";
-  std::vector<fs::path> paths;
-  std::vector<long> numbers;
-  for (const auto& f : inputs) {
-    paths.push_back(f.path);
-    numbers.push_back(f.number);
-  }
-  const std::vector<TrackedFrame> frames = tracked_frames(paths, numbers);
-  if (frames.empty()) TT_THROW(InvalidInput, "no frames");
+  const std::vector<TrackedFrame> frames = resolve_tracked_frames(opt.inputs);
   const std::size_t count = frames.size();
   const bool morph = !opt.morph_source.empty();
   if (morph && opt.direction != "forward") TT_THROW(UsageError, "--morph-source needs --direction forward");

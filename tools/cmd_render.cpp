@@ -3,7 +3,6 @@
 #include <cctype>
 #include <chrono>
 #include <cstdio>
-#include <iostream>
 #include <map>
 
 #include <nlohmann/json.hpp>
@@ -144,15 +143,12 @@ void run_render(const RenderOptions& opt) {
   if (opt.width < 1 || opt.height < 1 || opt.width > 16384 || opt.height > 16384)
     TT_THROW(UsageError, "--width and --height must be in [1, 16384]");
   if (opt.fit != "all" && opt.fit != "each") TT_THROW(UsageError, "--fit must be all or each");
-  std::vector<std::string> warnings;
-  std::vector<InputFrame> frames = resolve_inputs(opt.inputs, &warnings);
-  for (const auto& w : warnings) std::cerr << "topotrack: warning: " << w << "\n";
+  std::vector<InputFrame> frames = resolve_frames(opt.inputs);
   {
     std::vector<InputFrame> kept;
     for (std::size_t k = 0; k < frames.size(); k += std::size_t(opt.every)) kept.push_back(frames[k]);
     frames.swap(kept);
   }
-  if (frames.empty()) TT_THROW(InvalidInput, "no frames");
   for (auto& f : frames)
     if (f.number < 0) f.number = number_in_name(f.path);
   const fs::path out(opt.out);

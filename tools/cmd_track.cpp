@@ -9,7 +9,6 @@
 #include <chrono>
 #include <cmath>
 #include <exception>
-#include <iostream>
 #include <nlohmann/json.hpp>
 #include <optional>
 
@@ -57,15 +56,6 @@ double peak_memory_mb() {
   rusage u{};
   getrusage(RUSAGE_SELF, &u);
   return double(u.ru_maxrss) / 1024.0;  // ru_maxrss is in KiB on Linux
-}
-
-//! The sequence name for output files: the first frame's stem without its frame number ("blobs.0001" -> "blobs").
-std::string sequence_name(const fs::path& first) {
-  std::string s = first.stem().string();
-  while (!s.empty() && (std::isdigit(static_cast<unsigned char>(s.back())) || s.back() == '.' || s.back() == '_' ||
-                        s.back() == '-'))
-    s.pop_back();
-  return s.empty() ? "frame" : s;
 }
 
 std::string frame_file(const TrackOptions& opt, long number, const char* ext) {

@@ -3,7 +3,6 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <iostream>
 #include <nlohmann/json.hpp>
 
 #include "io/atomic_file.hpp"
@@ -50,14 +49,7 @@ void run_wave(const WaveOptions& opt) {
   if (opt.substeps < 0) TT_THROW(UsageError, "--substeps must be >= 0 (0: from the CFL bound)");
   if (!(opt.damping >= 0 && opt.damping < 1)) TT_THROW(UsageError, "--damping must be in [0, 1)");
   if (!(opt.speed >= 0) || !std::isfinite(opt.speed)) TT_THROW(UsageError, "--speed must be >= 0 (0: automatic)");
-  std::vector<std::string> warnings;
-  const auto inputs = resolve_inputs(opt.inputs, &warnings);
-  for (const auto& w : warnings) std::cerr << "topotrack: warning: " << w << "\n";
-  std::vector<fs::path> paths;
-  std::vector<long> numbers;
-  for (const auto& f : inputs) paths.push_back(f.path), numbers.push_back(f.number);
-  const std::vector<TrackedFrame> frames = tracked_frames(paths, numbers);
-  if (frames.empty()) TT_THROW(InvalidInput, "no frames");
+  const std::vector<TrackedFrame> frames = resolve_tracked_frames(opt.inputs);
   const fs::path out(opt.out);
   ensure_directory(out);
 

@@ -10,7 +10,6 @@
 // `/usr/bin/time topotrack track` (docs/results.md).
 // Run: tracker_bench --benchmark_format=json [--benchmark_filter=...]
 #include <benchmark/benchmark.h>
-#include <sys/resource.h>
 #include <tbb/global_control.h>
 #include <tbb/task_arena.h>
 #include <tbb/task_group.h>
@@ -20,6 +19,7 @@
 #include <memory>
 #include <vector>
 
+#include "bench/bench_support.hpp"
 #include "engine/tracker.hpp"
 #include "kernels/gen/synthetic.hpp"
 #include "kernels/mesh/mesh_convert.hpp"
@@ -44,11 +44,7 @@ const std::vector<SurfaceMesh>& blobs(int resolution) {
   return *frames;
 }
 
-double process_cpu_seconds() {
-  rusage u{};
-  getrusage(RUSAGE_SELF, &u);
-  return double(u.ru_utime.tv_sec + u.ru_stime.tv_sec) + 1e-6 * double(u.ru_utime.tv_usec + u.ru_stime.tv_usec);
-}
+using bench::process_cpu_seconds;
 
 void BM_TrackFrame(benchmark::State& state) {
   const auto& frames = blobs(int(state.range(0)));

@@ -4,7 +4,6 @@
 // lines 7 and 12). Wall time (real time) at 1 and 2 threads, plus the process CPU time of all threads.
 // Run: improve_data_bench --benchmark_format=json
 #include <benchmark/benchmark.h>
-#include <sys/resource.h>
 #include <tbb/global_control.h>
 
 #include <filesystem>
@@ -12,6 +11,7 @@
 #include <memory>
 #include <string>
 
+#include "bench/improve/improve_bench.hpp"
 #include "io/mesh_reader.hpp"
 #include "kernels/gen/resurface.hpp"
 #include "kernels/improve/improve.hpp"
@@ -19,13 +19,6 @@
 
 namespace topotrack {
 namespace {
-
-double process_cpu_seconds() {
-  rusage u{};
-  getrusage(RUSAGE_SELF, &u);
-  return double(u.ru_utime.tv_sec + u.ru_stime.tv_sec) +
-         1e-6 * double(u.ru_utime.tv_usec + u.ru_stime.tv_usec);
-}
 
 const char* const kCaptures[] = {"elephant", "samba", "pcow"};
 
@@ -50,59 +43,17 @@ void BM_ImproveResurfaced(benchmark::State& state) {
   const SurfaceMesh* in = resurfaced(int(state.range(0)), int(state.range(1)));
   if (!in) return state.SkipWithError("../shared/data not present");
   state.SetLabel(kCaptures[state.range(0)]);
-  tbb::global_control threads(tbb::global_control::max_allowed_parallelism, std::size_t(state.range(2)));
-  ImproveParams params;
-  params.measure_quality = false;
-  ImproveReport r;
-  double cpu = 0;
-  for (auto _ : state) {
-    state.PauseTiming();
-    SurfaceMesh m = in->clone();
-    EventList events;
-    const double c0 = process_cpu_seconds();
-    state.ResumeTiming();
-    r = improve_mesh(m, params, &events);
-    cpu += process_cpu_seconds() - c0;
-    state.PauseTiming();
-    m = SurfaceMesh();
-    state.ResumeTiming();
-  }
-  state.counters["cpu_seconds_all_threads"] = cpu / double(state.iterations());
-  state.counters["vertices_in"] = double(in->n_vertices());
-  state.counters["splits"] = double(r.splits);
-  state.counters["collapses"] = double(r.collapses);
-  state.counters["flips"] = double(r.flips);
+  const tbb::global_control threads(tbb::global_control::max_allowed_parallelism, std::size_t(state.range(2)));
+  const ImproveReport r = bench::time_improve(state, *in);
+  bench::improve_counters(state, *in, r);
   state.counters["relaxations"] = double(r.relaxations);
-  state.counters["iterations"] = r.iterations;
-  state.counters["s_scan"] = r.seconds_scan;
-  state.counters["s_split"] = r.seconds_split;
-  state.counters["s_collapse"] = r.seconds_collapse;
-  state.counters["s_bad"] = r.seconds_bad_triangles;
-  state.counters["s_fold"] = r.seconds_folds;
-  state.counters["s_finish"] = r.seconds_finish;
 }
 
 void BM_ImproveResurfacedAlreadyGood(benchmark::State& state) {
   const SurfaceMesh* in = resurfaced(int(state.range(0)), int(state.range(1)));
   if (!in) return state.SkipWithError("../shared/data not present");
   state.SetLabel(kCaptures[state.range(0)]);
-  SurfaceMesh good = in->clone();
-  const ImproveReport first = improve_mesh(good);
-  ImproveParams params;
-  params.measure_quality = false;
-  params.target_edge_length = std::sqrt(first.min_edge_length * first.max_edge_length);
-  tbb::global_control threads(tbb::global_control::max_allowed_parallelism, std::size_t(state.range(2)));
-  double cpu = 0;
-  for (auto _ : state) {
-    EventList events;
-    const double c0 = process_cpu_seconds();
-    const ImproveReport r = improve_mesh(good, params, &events);
-    cpu += process_cpu_seconds() - c0;
-    if (!events.empty() || r.flips + r.relaxations > 0)
-      state.SkipWithError("an already-good mesh was changed");
-  }
-  state.counters["cpu_seconds_all_threads"] = cpu / double(state.iterations());
-  state.counters["vertices_in"] = double(good.n_vertices());
+  bench::time_already_good(state, *in, int(state.range(2)));
 }
 
 // About 100k vertices: elephant at 230 voxels, samba at 310, pcow at 250.

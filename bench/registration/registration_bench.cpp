@@ -5,7 +5,8 @@
 // <= 4 s on 2 cores); the target stays the re-sampled 42k frame. Further arguments: graph density (percent of the paper's) and
 // the cap on PCG iterations per Gauss–Newton round (100: the former default, 15: the current one), and
 // whether the large-motion stages run (rigid pre-alignment, low-density pass and backward matches, by
-// their misfit tests).
+// their misfit tests), and the fine stage's form: vector displacements (0, the paper's) or displacements
+// along the vertex normals (1, FineParams::normal_displacement).
 // Counters: vertices, nodes, rounds, PCG iterations and the seconds of graph, correspondences,
 // assembly, factorisation and solve (coarse) and ray casting, assembly and solve (fine). "CPU" is the
 // process CPU time (all threads); the machine's load inflates "Time" (wall clock), so compare rows of
@@ -26,6 +27,7 @@
 #include <string>
 #include <tuple>
 
+#include "bench/bench_support.hpp"
 #include "kernels/gen/synthetic.hpp"
 #include "kernels/mesh/mesh_convert.hpp"
 #include "kernels/mesh/mesh_queries.hpp"
@@ -56,6 +58,24 @@ const Fixture& fixture(int size, int gap) {
   return *f;
 }
 
+// The counters both alignment benchmarks report: the coarse stage's graph, rounds and seconds per phase, the
+// fine stage's total.
+void alignment_counters(benchmark::State& state, const CoarseReport& c, const FineReport& fr) {
+  state.counters["nodes"] = c.nodes;
+  state.counters["rounds"] = c.iterations;
+  state.counters["coarse_pass_rounds"] = c.coarse_pass_iterations;
+  state.counters["backward"] = c.backward + c.backward_all;  // 0 off, 1 pruned nodes, 2 every node
+  state.counters["pcg_iterations"] = c.pcg_iterations;
+  state.counters["coarse_s"] = c.seconds_total;
+  state.counters["coarse_prealign_s"] = c.seconds_prealign;
+  state.counters["coarse_graph_s"] = c.seconds_graph;
+  state.counters["coarse_corr_s"] = c.seconds_correspondences;
+  state.counters["coarse_assembly_s"] = c.seconds_assembly;
+  state.counters["coarse_factor_s"] = c.seconds_factorisation;
+  state.counters["coarse_solve_s"] = c.seconds_solve;
+  state.counters["fine_s"] = fr.seconds_total;
+}
+
 void BM_AlignCoarseFine(benchmark::State& state) {
   const Fixture& f = fixture(int(state.range(0)), int(state.range(2)));
   CoarseParams params;
@@ -66,6 +86,8 @@ void BM_AlignCoarseFine(benchmark::State& state) {
     params.coarse_pass_misfit = 0;
     params.backward_weight = 0;
   }
+  FineParams fine;
+  fine.normal_displacement = state.range(5) != 0;
   CoarseReport c;
   FineReport fr;
   for (auto _ : state) {
@@ -73,38 +95,28 @@ void BM_AlignCoarseFine(benchmark::State& state) {
     SurfaceMesh mesh = f.source.clone();
     state.ResumeTiming();
     c = align_coarse(mesh, *f.target, params);
-    fr = align_fine(mesh, *f.target);
+    fr = align_fine(mesh, *f.target, fine);
     benchmark::DoNotOptimize(mesh.positions().data());
   }
+  alignment_counters(state, c, fr);
   state.counters["vertices"] = double(f.source.n_vertices());
-  state.counters["nodes"] = c.nodes;
-  state.counters["rounds"] = c.iterations;
   state.counters["levels"] = c.levels;
-  state.counters["pcg_iterations"] = c.pcg_iterations;
   state.counters["factor_nnz"] = double(c.factor_nonzeros);
-  state.counters["coarse_s"] = c.seconds_total;
-  state.counters["coarse_prealign_s"] = c.seconds_prealign;
-  state.counters["coarse_pass_rounds"] = c.coarse_pass_iterations;
-  state.counters["backward"] = c.backward + c.backward_all;  // 0 off, 1 pruned nodes, 2 every node
-  state.counters["coarse_graph_s"] = c.seconds_graph;
-  state.counters["coarse_corr_s"] = c.seconds_correspondences;
-  state.counters["coarse_assembly_s"] = c.seconds_assembly;
-  state.counters["coarse_factor_s"] = c.seconds_factorisation;
-  state.counters["coarse_solve_s"] = c.seconds_solve;
-  state.counters["fine_s"] = fr.seconds_total;
   state.counters["fine_raycast_s"] = fr.seconds_raycast;
   state.counters["fine_assembly_s"] = fr.seconds_assembly;
   state.counters["fine_solve_s"] = fr.seconds_solve;
   state.counters["coarse_fine_s"] = c.seconds_total + fr.seconds_total;
 }
-// {size, density %, gap, PCG cap, large-motion stages (0: off, 1: the defaults)}
+// {size, density %, gap, PCG cap, large-motion stages (0: off, 1: the defaults), fine displacements (0: vector,
+// 1: normal)}
 BENCHMARK(BM_AlignCoarseFine)
-    ->ArgsProduct({{2, 3}, {100}, {1, 15}, {15, 100}, {0, 1}})
-    ->Args({0, 100, 1, 15, 1})
-    ->Args({0, 100, 15, 15, 1})
-    ->Args({1, 100, 15, 15, 1})
-    ->Args({2, 25, 15, 15, 1})
-    ->ArgNames({"size", "density", "gap", "pcg", "large"})
+    ->ArgsProduct({{2, 3}, {100}, {1, 15}, {15, 100}, {0, 1}, {0}})
+    ->ArgsProduct({{2, 3}, {100}, {1, 15}, {15}, {1}, {1}})
+    ->Args({0, 100, 1, 15, 1, 0})
+    ->Args({0, 100, 15, 15, 1, 0})
+    ->Args({1, 100, 15, 15, 1, 0})
+    ->Args({2, 25, 15, 15, 1, 0})
+    ->ArgNames({"size", "density", "gap", "pcg", "large", "normal"})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime()
     ->MeasureProcessCPUTime()
@@ -115,7 +127,7 @@ BENCHMARK(BM_AlignCoarseFine)
 // improve_mesh at its own mean edge length (the tracker's M), the target frame 98 as marching cubes gives
 // it. The ground truth is the blobs' rotation: "truth_pct" is the mean distance of the source vertices to
 // where the rotation takes them after coarse + fine, "coarse_truth_pct" after coarse alone, in percent of
-// the target's bounding-box diagonal.
+// the target's bounding-box diagonal. The fourth argument: the fine stage's displacements (0 vector, 1 normal).
 struct BlobsStep {
   SurfaceMesh source;
   std::vector<Vec3> truth;
@@ -196,6 +208,8 @@ void BM_TrackerStep(benchmark::State& state) {
     params.coarse_pass_misfit = 0;
   }
   override_params(params);
+  FineParams fine;
+  fine.normal_displacement = state.range(3) != 0;
   CoarseReport c;
   FineReport fr;
   double coarse_truth = 0, truth = 0;
@@ -207,7 +221,7 @@ void BM_TrackerStep(benchmark::State& state) {
     state.PauseTiming();
     coarse_truth = truth_error(mesh, f);
     state.ResumeTiming();
-    fr = align_fine(mesh, *f.target);
+    fr = align_fine(mesh, *f.target, fine);
     benchmark::DoNotOptimize(mesh.positions().data());
     state.PauseTiming();
     truth = truth_error(mesh, f);
@@ -218,30 +232,20 @@ void BM_TrackerStep(benchmark::State& state) {
   state.counters["coarse_truth_pct"] = coarse_truth;
   state.counters["truth_pct"] = truth;
   state.counters["misfit_pct"] = 100 * c.misfit_start;
-  state.counters["nodes"] = c.nodes;
-  state.counters["rounds"] = c.iterations;
-  state.counters["coarse_pass_rounds"] = c.coarse_pass_iterations;
-  state.counters["backward"] = c.backward + c.backward_all;  // 0 off, 1 pruned nodes, 2 every node
-  state.counters["pcg_iterations"] = c.pcg_iterations;
-  state.counters["coarse_s"] = c.seconds_total;
-  state.counters["coarse_prealign_s"] = c.seconds_prealign;
-  state.counters["coarse_graph_s"] = c.seconds_graph;
-  state.counters["coarse_corr_s"] = c.seconds_correspondences;
-  state.counters["coarse_assembly_s"] = c.seconds_assembly;
-  state.counters["coarse_factor_s"] = c.seconds_factorisation;
-  state.counters["coarse_solve_s"] = c.seconds_solve;
-  state.counters["fine_s"] = fr.seconds_total;
+  alignment_counters(state, c, fr);
   if (std::getenv("TOPOTRACK_BENCH_ROUNDS"))  // per-round figures, for profiling the schedule
     for (const CoarseRound& r : c.rounds)
       std::fprintf(stderr, "round alpha_reg %g step %g motion %.3f fit %.3f pcg %d energy %.4g -> %.4g\n", r.alpha_reg,
                    r.step, r.motion, r.fit_distance, r.pcg_iterations, r.energy_before, r.energy);
 }
-// {grid resolution, large-motion stages (0: off, 1: the defaults), graph density in percent}; density
-// 25 without the large-motion stages is the defaults' low-density pass alone.
+// {grid resolution, large-motion stages (0: off, 1: the defaults), graph density in percent, fine
+// displacements (0 vector, 1 normal)}; density 25 without the large-motion stages is the defaults' low-density
+// pass alone.
 BENCHMARK(BM_TrackerStep)
-    ->ArgsProduct({{140, 280}, {0, 1}, {100}})
-    ->Args({280, 0, 25})
-    ->ArgNames({"resolution", "large", "density"})
+    ->ArgsProduct({{140, 280}, {0, 1}, {100}, {0}})
+    ->ArgsProduct({{140, 280}, {1}, {100}, {1}})
+    ->Args({280, 0, 25, 0})
+    ->ArgNames({"resolution", "large", "density", "normal"})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime()
     ->MeasureProcessCPUTime()
@@ -258,12 +262,12 @@ void BM_DeformationGraph(benchmark::State& state) {
   for (auto _ : state) {
     const auto t0 = std::chrono::steady_clock::now();
     const DeformationGraph g = build_deformation_graph(f.source, spacing, 4);
-    fastest = std::min(fastest, std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+    fastest = std::min(fastest, bench::milliseconds_since(t0));
     nodes = g.n_nodes();
   }
   const auto t0 = std::chrono::steady_clock::now();
   benchmark::DoNotOptimize(sample_graph_nodes(f.source, spacing).data());
-  state.counters["sample_ms"] = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  state.counters["sample_ms"] = bench::milliseconds_since(t0);
   state.counters["fastest_ms"] = fastest;
   state.counters["nodes"] = double(nodes);
   state.counters["vertices"] = double(f.source.n_vertices());
@@ -345,7 +349,7 @@ void BM_BlockCholeskySolve(benchmark::State& state) {
     const auto t0 = std::chrono::steady_clock::now();
     chol.solve3(x.data());
     benchmark::DoNotOptimize(x.data());
-    fastest = std::min(fastest, std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+    fastest = std::min(fastest, bench::milliseconds_since(t0));
   }
   state.counters["fastest_ms"] = fastest;
   state.counters["nodes"] = N;
@@ -364,7 +368,7 @@ void BM_BlockCholeskyFactorize(benchmark::State& state) {
   for (auto _ : state) {
     const auto t0 = std::chrono::steady_clock::now();
     chol.factorize(sys.lower);
-    fastest = std::min(fastest, std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+    fastest = std::min(fastest, bench::milliseconds_since(t0));
   }
   state.counters["fastest_ms"] = fastest;
   state.counters["nodes"] = double(sys.graph.n_nodes());
@@ -382,7 +386,7 @@ void BM_CholmodFactorize(benchmark::State& state) {
   const Eigen::MatrixXd b = Eigen::MatrixXd::Ones(sys.lower.rows(), 3);
   const auto t0 = std::chrono::steady_clock::now();
   for (int i = 0; i < 10; ++i) benchmark::DoNotOptimize(chol.solve(b).data());
-  state.counters["solve_ms"] = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count() / 10;
+  state.counters["solve_ms"] = bench::milliseconds_since(t0) / 10;
 }
 BENCHMARK(BM_CholmodFactorize)->Arg(0)->Arg(2)->Arg(3)->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime();
 

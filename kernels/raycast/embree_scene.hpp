@@ -15,6 +15,28 @@ namespace topotrack {
 //! repeat per frame. Thread-safe. \throw Error when Embree cannot create it.
 RTCDevice embree_device();
 
+//! A ray from `origin` along `direction` (not normalised: t counts in its lengths) over t in [0, tfar], in
+//! Embree's float layout, with no hit recorded yet: what rtcIntersect1 takes.
+inline RTCRayHit embree_ray(const Vec3& origin, const Vec3& direction, float tfar) {
+  RTCRayHit rh;
+  rh.ray.org_x = float(origin.x());
+  rh.ray.org_y = float(origin.y());
+  rh.ray.org_z = float(origin.z());
+  rh.ray.dir_x = float(direction.x());
+  rh.ray.dir_y = float(direction.y());
+  rh.ray.dir_z = float(direction.z());
+  rh.ray.tnear = 0.0f;
+  rh.ray.tfar = tfar;
+  rh.ray.time = 0.0f;
+  rh.ray.mask = ~0u;
+  rh.ray.id = 0;
+  rh.ray.flags = 0;
+  rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+  rh.hit.primID = RTC_INVALID_GEOMETRY_ID;
+  rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+  return rh;
+}
+
 //! An owned, committed Embree scene holding `triangles` over `positions` (in float) as geometry 0, so
 //! that a hit's primID is the triangle index. Move-only.
 class EmbreeScene {

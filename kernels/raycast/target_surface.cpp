@@ -68,23 +68,10 @@ struct TargetSurface::Impl {
     Hit out;
     RTCIntersectContext context;
     rtcInitIntersectContext(&context);
-    RTCRayHit rh;
-    rh.ray.org_x = float(o.x());
-    rh.ray.org_y = float(o.y());
-    rh.ray.org_z = float(o.z());
-    rh.ray.dir_x = float(d.x());
-    rh.ray.dir_y = float(d.y());
-    rh.ray.dir_z = float(d.z());
-    rh.ray.tnear = 0.0f;
-    rh.ray.tfar = max_distance >= double(std::numeric_limits<float>::max()) ? std::numeric_limits<float>::infinity()
-                                                                          : float(max_distance);
-    rh.ray.time = 0.0f;
-    rh.ray.mask = ~0u;
-    rh.ray.id = 0;
-    rh.ray.flags = 0;
-    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-    rh.hit.primID = RTC_INVALID_GEOMETRY_ID;
-    rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+    RTCRayHit rh = embree_ray(o, d,
+                              max_distance >= double(std::numeric_limits<float>::max())
+                                  ? std::numeric_limits<float>::infinity()
+                                  : float(max_distance));
     rtcIntersect1(scene.get(), &context, &rh);
     if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return out;
     const Index f = rh.hit.primID;

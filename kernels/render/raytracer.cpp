@@ -75,21 +75,7 @@ struct Shader {
   bool shade(const Vec3& dir, std::array<double, 3>& rgb) const {
     RTCIntersectContext ctx;
     rtcInitIntersectContext(&ctx);
-    RTCRayHit rh;
-    rh.ray.org_x = float(eye.x());
-    rh.ray.org_y = float(eye.y());
-    rh.ray.org_z = float(eye.z());
-    rh.ray.dir_x = float(dir.x());
-    rh.ray.dir_y = float(dir.y());
-    rh.ray.dir_z = float(dir.z());
-    rh.ray.tnear = 0.0f;
-    rh.ray.tfar = std::numeric_limits<float>::infinity();
-    rh.ray.time = 0.0f;
-    rh.ray.mask = ~0u;
-    rh.ray.id = 0;
-    rh.ray.flags = 0;
-    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-    rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+    RTCRayHit rh = embree_ray(eye, dir, std::numeric_limits<float>::infinity());
     rtcIntersect1(s.scene.get(), &ctx, &rh);
     if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) {
       for (int c = 0; c < 3; ++c) rgb[c] = p.background[c];

@@ -102,12 +102,26 @@ void column_scalar(const TriangleFrame& t, double px, double py, double oz, int 
 // The same, four voxels at a time with AVX2: every region of point_triangle_d2 is computed with the same
 // operations in the same order (no FMA: the target does not enable it, so nothing is contracted), and the
 // region is chosen by the same tests in the same priority, so each value is bit-identical to column_scalar's.
-// Helpers of column_avx2 as macros: lambdas and functions would not inherit its target.
+// Helpers of column_avx2 as macros or functions of the same target: lambdas would not inherit it.
 #define TT_DOT(ux, uy, uz, vx, vy, vz) \
   _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(ux, vx), _mm256_mul_pd(uy, vy)), _mm256_mul_pd(uz, vz))
 #define TT_LE(u, v) _mm256_cmp_pd(u, v, _CMP_LE_OQ)
 #define TT_AND3(a, b, c) _mm256_and_pd(_mm256_and_pd(a, b), c)
 #define TT_SEL(m, yes, no) _mm256_blendv_pd(no, yes, m)
+
+// An edge region of point_triangle_d2 where its test `c` holds: |u - s v|^2 with s = num / den, or |u|^2 (u2) when
+// den <= 0, into r; computed only when an active voxel is in the region (the divisions are the dearest part).
+__attribute__((target("avx2"), always_inline)) inline __m256d edge_region(__m256d r, __m256d c, __m256d active,
+                                                                          __m256d num, __m256d den, __m256d ux,
+                                                                          __m256d uy, __m256d uz, __m256d vx,
+                                                                          __m256d vy, __m256d vz, __m256d u2) {
+  if (!_mm256_movemask_pd(_mm256_and_pd(c, active))) return r;
+  const __m256d s = _mm256_div_pd(num, den);
+  const __m256d wx = _mm256_sub_pd(ux, _mm256_mul_pd(s, vx)), wy = _mm256_sub_pd(uy, _mm256_mul_pd(s, vy)),
+                wz = _mm256_sub_pd(uz, _mm256_mul_pd(s, vz));
+  const __m256d e = TT_SEL(_mm256_cmp_pd(den, _mm256_setzero_pd(), _CMP_GT_OQ), TT_DOT(wx, wy, wz, wx, wy, wz), u2);
+  return TT_SEL(c, e, r);
+}
 
 __attribute__((target("avx2"), always_inline)) inline void column_avx2(const TriangleFrame& t, double px, double py,
                                                                       double oz, int z0, int z1, double* row) {
@@ -142,33 +156,14 @@ __attribute__((target("avx2"), always_inline)) inline void column_avx2(const Tri
     // The face region; a degenerate triangle there gives the nearest corner (equal minima are equal bits).
     __m256d r = t.has_normal ? hp2 : _mm256_min_pd(_mm256_min_pd(ap2, bp2), cp2);
     // The other regions from the last to the first, so that the first whose test holds wins, as in
-    // point_triangle_d2. Edge regions: |u - s v|^2 with s = num / den, or |u|^2 when den <= 0; computed only when
-    // an active voxel is in them (the divisions are the dearest part).
-    const __m256d c6 = TT_AND3(TT_LE(va, zero), TT_LE(zero, d43), TT_LE(zero, d56));
-    if (_mm256_movemask_pd(_mm256_and_pd(c6, active))) {
-      const __m256d den = _mm256_add_pd(d43, d56), s = _mm256_div_pd(d43, den);
-      const __m256d wx = _mm256_sub_pd(bpx, _mm256_mul_pd(s, bcx)), wy = _mm256_sub_pd(bpy, _mm256_mul_pd(s, bcy)),
-                    wz = _mm256_sub_pd(bpz, _mm256_mul_pd(s, bcz));
-      const __m256d e = TT_SEL(_mm256_cmp_pd(den, zero, _CMP_GT_OQ), TT_DOT(wx, wy, wz, wx, wy, wz), bp2);
-      r = TT_SEL(c6, e, r);
-    }
-    const __m256d c5 = TT_AND3(TT_LE(vb, zero), TT_LE(zero, d2), TT_LE(d6, zero));
-    if (_mm256_movemask_pd(_mm256_and_pd(c5, active))) {
-      const __m256d den = _mm256_sub_pd(d2, d6), s = _mm256_div_pd(d2, den);
-      const __m256d wx = _mm256_sub_pd(apx, _mm256_mul_pd(s, acx)), wy = _mm256_sub_pd(apy, _mm256_mul_pd(s, acy)),
-                    wz = _mm256_sub_pd(apz, _mm256_mul_pd(s, acz));
-      const __m256d e = TT_SEL(_mm256_cmp_pd(den, zero, _CMP_GT_OQ), TT_DOT(wx, wy, wz, wx, wy, wz), ap2);
-      r = TT_SEL(c5, e, r);
-    }
+    // point_triangle_d2.
+    r = edge_region(r, TT_AND3(TT_LE(va, zero), TT_LE(zero, d43), TT_LE(zero, d56)), active, d43,
+                    _mm256_add_pd(d43, d56), bpx, bpy, bpz, bcx, bcy, bcz, bp2);
+    r = edge_region(r, TT_AND3(TT_LE(vb, zero), TT_LE(zero, d2), TT_LE(d6, zero)), active, d2, _mm256_sub_pd(d2, d6),
+                    apx, apy, apz, acx, acy, acz, ap2);
     r = TT_SEL(_mm256_and_pd(TT_LE(zero, d6), TT_LE(d5, d6)), cp2, r);
-    const __m256d c3 = TT_AND3(TT_LE(vc, zero), TT_LE(zero, d1), TT_LE(d3, zero));
-    if (_mm256_movemask_pd(_mm256_and_pd(c3, active))) {
-      const __m256d den = _mm256_sub_pd(d1, d3), s = _mm256_div_pd(d1, den);
-      const __m256d wx = _mm256_sub_pd(apx, _mm256_mul_pd(s, abx)), wy = _mm256_sub_pd(apy, _mm256_mul_pd(s, aby)),
-                    wz = _mm256_sub_pd(apz, _mm256_mul_pd(s, abz));
-      const __m256d e = TT_SEL(_mm256_cmp_pd(den, zero, _CMP_GT_OQ), TT_DOT(wx, wy, wz, wx, wy, wz), ap2);
-      r = TT_SEL(c3, e, r);
-    }
+    r = edge_region(r, TT_AND3(TT_LE(vc, zero), TT_LE(zero, d1), TT_LE(d3, zero)), active, d1, _mm256_sub_pd(d1, d3),
+                    apx, apy, apz, abx, aby, abz, ap2);
     r = TT_SEL(_mm256_and_pd(TT_LE(zero, d3), TT_LE(d4, d3)), bp2, r);
     r = TT_SEL(_mm256_and_pd(TT_LE(d1, zero), TT_LE(d2, zero)), ap2, r);
     active = _mm256_and_pd(active, _mm256_cmp_pd(r, cur, _CMP_LT_OQ));  // strict, as in column_scalar

@@ -14,6 +14,7 @@ namespace topotrack {
 namespace {
 
 using test::blob;
+using test::mean_error;
 
 // The blob pushed outwards by `offset` along its vertex normals and a target of the blob itself (a finer
 // triangulation of the same shape): vertex i belongs at truth[i] = x_i - offset n_i, straight down its
@@ -32,12 +33,6 @@ OffsetCase offset_case(double offset) {
   for (std::size_t i = 0; i < src.positions.size(); ++i) src.positions[i] += offset * n[i];
   const test::Soup tgt = blob(5);
   return OffsetCase{src.mesh(), truth, TargetSurface(tgt.positions, tgt.triangles)};
-}
-
-double mean_error(const SurfaceMesh& m, const std::vector<Vec3>& truth) {
-  double e = 0;
-  for (std::size_t i = 0; i < truth.size(); ++i) e += (m.positions()[i] - truth[i]).norm();
-  return e / double(truth.size());
 }
 
 double mean_distance(const SurfaceMesh& m, const TargetSurface& t) {
@@ -119,18 +114,11 @@ TEST(FineNormal, OneAndTwoThreadsGiveIdenticalResults) {
 }
 
 TEST(FineNormal, PrunedComponentStays) {
-  // A second sphere beyond sigma gets no correspondence and no displacement (t diffuses within a component
-  // only), as with vector displacements.
-  const test::Soup near_sphere = test::icosphere(3, 1.0);
-  const test::Soup far_sphere = test::icosphere(3, 0.5, Vec3(4, 0, 0));
-  SurfaceMesh mesh = test::merge(near_sphere, far_sphere).mesh();
-  const test::Soup t = test::icosphere(4, 1.03);
-  const TargetSurface target(t.positions, t.triangles);
-  const std::vector<Vec3> before = mesh.positions();
-  const FineReport r = align_fine(mesh, target, normal_params());
-  EXPECT_EQ(r.pruned, far_sphere.positions.size());
-  for (std::size_t i = near_sphere.positions.size(); i < before.size(); ++i) EXPECT_EQ(mesh.positions()[i], before[i]);
-  for (std::size_t i = 0; i < near_sphere.positions.size(); ++i) EXPECT_NEAR(mesh.positions()[i].norm(), 1.03, 2e-3);
+  // A second sphere beyond sigma gets no correspondence and no displacement, as with vector displacements.
+  test::FarSphereCase c = test::far_sphere_case();
+  const std::vector<Vec3> before = c.mesh.positions();
+  const FineReport r = align_fine(c.mesh, c.target, normal_params());
+  test::expect_far_sphere_kept(c, before, r.pruned);
 }
 
 }  // namespace

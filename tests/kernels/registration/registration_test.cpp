@@ -21,6 +21,7 @@ namespace topotrack {
 namespace {
 
 using test::blob;
+using test::mean_error;
 
 Eigen::Matrix3d rotation(double deg, const Vec3& axis) {
   return Eigen::AngleAxisd(deg * std::numbers::pi / 180, axis.normalized()).toRotationMatrix();
@@ -33,12 +34,6 @@ CoarseParams paper_scheme() {
   p.prealign_misfit = 0;
   p.coarse_pass_misfit = 0;
   return p;
-}
-
-double mean_error(const SurfaceMesh& m, const std::vector<Vec3>& truth) {
-  double e = 0;
-  for (std::size_t i = 0; i < truth.size(); ++i) e += (m.positions()[i] - truth[i]).norm();
-  return e / double(truth.size());
 }
 
 // Source mesh, ground-truth positions and a target with different connectivity (coarser icosphere
@@ -409,19 +404,11 @@ TEST(Alignment, RotationStepsAreRetracted) {
 
 TEST(Alignment, FinePrunesBeyondSigma) {
   // Sphere plus a far-away sphere that has no counterpart: the far one must not move.
-  const test::Soup near_sphere = test::icosphere(3, 1.0);
-  const test::Soup far_sphere = test::icosphere(3, 0.5, Vec3(4, 0, 0));
-  SurfaceMesh mesh = test::merge(near_sphere, far_sphere).mesh();
-  const test::Soup t = test::icosphere(4, 1.03);
-  const TargetSurface target(t.positions, t.triangles);
-  const std::vector<Vec3> before = mesh.positions();
-  const FineReport fr = align_fine(mesh, target);
-  EXPECT_EQ(fr.pruned, far_sphere.positions.size());
-  EXPECT_EQ(fr.correspondences, near_sphere.positions.size());
-  for (std::size_t i = near_sphere.positions.size(); i < before.size(); ++i)
-    EXPECT_EQ(mesh.positions()[i], before[i]);
-  for (std::size_t i = 0; i < near_sphere.positions.size(); ++i)
-    EXPECT_NEAR(mesh.positions()[i].norm(), 1.03, 2e-3);
+  test::FarSphereCase c = test::far_sphere_case();
+  const std::vector<Vec3> before = c.mesh.positions();
+  const FineReport fr = align_fine(c.mesh, c.target);
+  EXPECT_EQ(fr.correspondences, c.near_vertices);
+  test::expect_far_sphere_kept(c, before, fr.pruned);
 }
 
 TEST(Alignment, ComponentsWithoutCounterpartStayFinite) {

@@ -32,11 +32,7 @@ Case make_case(const Eigen::Matrix3d& R, const Vec3& t) {
   return Case{src.mesh(), truth, TargetSurface(tgt.positions, tgt.triangles)};
 }
 
-double mean_error(const SurfaceMesh& m, const std::vector<Vec3>& truth) {
-  double e = 0;
-  for (std::size_t i = 0; i < truth.size(); ++i) e += (m.positions()[i] - truth[i]).norm();
-  return e / double(truth.size());
-}
+using test::mean_error;
 
 TEST(RigidIcp, RecoversLargeRigidMotion) {
   const Eigen::Matrix3d R = rotation(60, Vec3(0.3, 1, 0.2));
