@@ -6,8 +6,11 @@
 #include <benchmark/benchmark.h>
 
 #include <chrono>
+#include <functional>
 #include <map>
 #include <memory>
+#include <string>
+#include <utility>
 
 #include "kernels/gen/synthetic.hpp"
 #include "kernels/mesh/mesh_convert.hpp"
@@ -21,36 +24,65 @@ namespace topotrack {
 namespace {
 
 struct Pair {
-  SurfaceMesh mesh, next;
-  double voxel = 0;
+  SurfaceMesh mesh, next;  // M and the surface it is constrained to
+  double voxel = 0;        // M's mean edge length (the tracked mesh's target edge length)
 };
 
-// Frames 120 and 121 of a 240-frame metaballs scene (consecutive frames close together, as M and S_n are
-// after alignment; the balls are splitting apart there), at `resolution` voxels.
-const Pair& scene_pair(int resolution) {
-  static std::map<int, std::unique_ptr<Pair>> cache;
-  auto& p = cache[resolution];
+// The pair `make` picks from a `frames`-frame synthetic scene of `kind` at `resolution` voxels, built once.
+const Pair& cached_pair(SyntheticKind kind, int frames, int resolution,
+                        const std::function<std::pair<MeshData, MeshData>(const SyntheticScene&)>& make) {
+  static std::map<std::pair<int, int>, std::unique_ptr<Pair>> cache;
+  auto& p = cache[{int(kind), resolution}];
   if (!p) {
     SyntheticParams sp;
-    sp.kind = SyntheticKind::kMetaballs;
-    sp.frames = 240;
+    sp.kind = kind;
+    sp.frames = frames;
     sp.resolution = resolution;
-    const SyntheticScene scene(sp);
+    const auto [mesh, next] = make(SyntheticScene(sp));
     p = std::make_unique<Pair>();
-    p->mesh = to_surface_mesh(scene.frame_mesh(120));
-    p->next = to_surface_mesh(scene.frame_mesh(121));
+    p->mesh = to_surface_mesh(mesh);
+    p->next = to_surface_mesh(next);
     p->voxel = mean_edge_length(p->mesh);
   }
   return *p;
 }
 
+// Frames 120 and 121 of a 240-frame metaballs scene (consecutive frames close together, as M and S_n are
+// after alignment; the balls are splitting apart there), at `resolution` voxels.
+const Pair& scene_pair(int resolution) {
+  return cached_pair(SyntheticKind::kMetaballs, 240, resolution, [](const SyntheticScene& scene) {
+    return std::pair(scene.frame_mesh(120), scene.frame_mesh(121));
+  });
+}
+
+// ConstrainTopology's steps, from its last run, as counters `prefix`<step> (classify_s: the classification
+// alone, without cut and index).
+void step_counters(benchmark::State& state, const ConstrainReport& r, const std::string& prefix = "") {
+  const std::pair<const char*, double> steps[] = {
+      {"complex_cells", double(r.complex_cells)},
+      {"cut_s", r.seconds_cut},
+      {"index_s", r.seconds_index},
+      {"classify_s", r.seconds_classify - r.seconds_cut - r.seconds_index},
+      {"replace_s", r.seconds_replace},
+      {"assemble_s", r.seconds_assemble},
+      {"rebuild_s", r.seconds_rebuild},
+      {"slivers_s", r.seconds_slivers},
+      {"assemblies", double(r.assemblies)},
+      {"components_s", r.seconds_components},
+      {"events_s", r.seconds_events},
+      {"total_s", r.seconds_total}};
+  for (const auto& [name, value] : steps) state.counters[prefix + name] = value;
+}
+
 void run(benchmark::State& state, bool self, SdfMethod method = SdfMethod::kAuto, double half_width = 3.0) {
   const Pair& p = scene_pair(int(state.range(0)));
   ConstrainReport r;
+  double sdf_s = 0;
   for (auto _ : state) {
     state.PauseTiming();
     SurfaceMesh m = p.mesh.clone();
     state.ResumeTiming();
+    const auto t0 = std::chrono::steady_clock::now();
     std::vector<Vec3> P;
     std::vector<std::array<Index, 3>> T;
     extract_triangles(self ? m : p.next, P, T);
@@ -59,15 +91,14 @@ void run(benchmark::State& state, bool self, SdfMethod method = SdfMethod::kAuto
     sp.half_width_voxels = half_width;
     sp.method = method;
     const openvdb::FloatGrid::Ptr theta = signed_distance(P, T, sp);
+    sdf_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     EventList events;
     r = constrain_topology(m, *theta, {}, &events);
     benchmark::DoNotOptimize(m.n_vertices());
   }
   state.counters["vertices"] = double(p.mesh.n_vertices());
-  state.counters["complex_cells"] = double(r.complex_cells);
-  state.counters["classify_s"] = r.seconds_classify;
-  state.counters["replace_s"] = r.seconds_replace;
-  state.counters["events_s"] = r.seconds_events;
+  step_counters(state, r);
+  state.counters["sdf_s"] = sdf_s;
   state.counters["constrain_s"] = r.seconds_total;
 }
 
@@ -89,18 +120,7 @@ void BM_ConstrainSelfOnly(benchmark::State& state) {
     r = constrain_topology(m, *theta, {}, &events);
   }
   state.counters["vertices"] = double(p.mesh.n_vertices());
-  state.counters["complex_cells"] = double(r.complex_cells);
-  state.counters["cut_s"] = r.seconds_cut;
-  state.counters["index_s"] = r.seconds_index;
-  state.counters["classify_s"] = r.seconds_classify - r.seconds_cut - r.seconds_index;
-  state.counters["replace_s"] = r.seconds_replace;
-  state.counters["assemble_s"] = r.seconds_assemble;
-  state.counters["rebuild_s"] = r.seconds_rebuild;
-  state.counters["slivers_s"] = r.seconds_slivers;
-  state.counters["assemblies"] = r.assemblies;
-  state.counters["components_s"] = r.seconds_components;
-  state.counters["events_s"] = r.seconds_events;
-  state.counters["total_s"] = r.seconds_total;
+  step_counters(state, r);
 }
 // The steps of ConstrainTopology(M, φ_M) alone: the lattice cut, the cell index, the classification.
 void BM_LatticeCut(benchmark::State& state) {
@@ -138,6 +158,16 @@ void BM_ClassifyCells(benchmark::State& state) {
   state.counters["cells"] = double(index.cells.size());
   state.counters["complex"] = double(n);
 }
+// The rebuild of ConstrainTopology's replacement: SurfaceMesh::from_triangles of a whole closed mesh.
+void BM_FromTriangles(benchmark::State& state) {
+  const Pair& p = scene_pair(int(state.range(0)));
+  std::vector<Vec3> P;
+  std::vector<std::array<Index, 3>> T;
+  extract_triangles(p.mesh, P, T);
+  for (auto _ : state) benchmark::DoNotOptimize(SurfaceMesh::from_triangles(P, T, {}, true).n_edges());
+  state.counters["vertices"] = double(p.mesh.n_vertices());
+}
+BENCHMARK(BM_FromTriangles)->Arg(100)->Arg(300)->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime()->UseRealTime();
 BENCHMARK(BM_LatticeCut)->Arg(100)->Arg(200)->Arg(300)->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime()->UseRealTime();
 BENCHMARK(BM_IndexCells)->Arg(100)->Arg(200)->Arg(300)->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime()->UseRealTime();
 BENCHMARK(BM_ClassifyCells)->ArgsProduct({{100, 200, 300}, {0, 1}})->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime()->UseRealTime();
@@ -166,19 +196,8 @@ BENCHMARK(BM_ConstrainSelfTracker)->ArgsProduct({{300}, {200, 175}})->Unit(bench
 // the tracker's default parameters (profiles/default.json: half width 2, exact-sign band 0.25 voxel), and a half
 // width of 1.75. Almost every cell is simple: what is measured is the cost of finding that out. Resolution 240:
 // 100k vertices.
-struct Matched {
-  SurfaceMesh mesh, target;
-  double voxel = 0;
-};
-const Matched& matched_pair(int resolution) {
-  static std::map<int, std::unique_ptr<Matched>> cache;
-  auto& p = cache[resolution];
-  if (!p) {
-    SyntheticParams sp;
-    sp.kind = SyntheticKind::kBlobs;
-    sp.frames = 100;
-    sp.resolution = resolution;
-    const SyntheticScene scene(sp);
+const Pair& matched_pair(int resolution) {
+  return cached_pair(SyntheticKind::kBlobs, 100, resolution, [](const SyntheticScene& scene) {
     MeshData m = scene.frame_mesh(2);
     const RigidMotion a = scene.blobs_motion(2), b = scene.blobs_motion(3);
     const Eigen::Matrix3d R = b.rotation * a.rotation.transpose();
@@ -186,15 +205,11 @@ const Matched& matched_pair(int resolution) {
       const Vec3 y = R * (Vec3(x[0], x[1], x[2]) - a.center) + b.center;
       x = {y.x(), y.y(), y.z()};
     }
-    p = std::make_unique<Matched>();
-    p->mesh = to_surface_mesh(m);
-    p->target = to_surface_mesh(scene.frame_mesh(3));
-    p->voxel = mean_edge_length(p->mesh);
-  }
-  return *p;
+    return std::pair(std::move(m), scene.frame_mesh(3));
+  });
 }
 void BM_TrackerTopology(benchmark::State& state) {
-  const Matched& p = matched_pair(int(state.range(0)));
+  const Pair& p = matched_pair(int(state.range(0)));
   // Second argument: the half width in hundredths of a voxel (200: the profile's 2.0; 175: enough for what
   // ConstrainTopology reads, corners of cells within sqrt(3) voxels of the surface).
   const double kHalfWidth = double(state.range(1)) / 100, kExactSignBand = 0.25;
@@ -210,7 +225,7 @@ void BM_TrackerTopology(benchmark::State& state) {
     const auto t1 = std::chrono::steady_clock::now();
     self = constrain_topology(m, *phi_m, {}, &events);
     const auto t2 = std::chrono::steady_clock::now();
-    const openvdb::FloatGrid::Ptr phi_s = signed_distance(p.target, p.voxel, kHalfWidth, kExactSignBand);
+    const openvdb::FloatGrid::Ptr phi_s = signed_distance(p.next, p.voxel, kHalfWidth, kExactSignBand);
     const auto t3 = std::chrono::steady_clock::now();
     target = constrain_topology(m, *phi_s, {}, &events);
     sdf_s = std::chrono::duration<double>((t1 - t0) + (t3 - t2)).count();
@@ -221,14 +236,7 @@ void BM_TrackerTopology(benchmark::State& state) {
   state.counters["self_s"] = self.seconds_total;
   state.counters["target_s"] = target.seconds_total;
   // The split of ConstrainTopology(M, φ_M) (the call with complex cells in the common case).
-  state.counters["self_cut_s"] = self.seconds_cut;
-  state.counters["self_index_s"] = self.seconds_index;
-  state.counters["self_classify_s"] = self.seconds_classify - self.seconds_cut - self.seconds_index;
-  state.counters["self_assemble_s"] = self.seconds_assemble;
-  state.counters["self_rebuild_s"] = self.seconds_rebuild;
-  state.counters["self_slivers_s"] = self.seconds_slivers;
-  state.counters["self_components_s"] = self.seconds_components;
-  state.counters["self_events_s"] = self.seconds_events;
+  step_counters(state, self, "self_");
   state.counters["complex_self"] = double(self.complex_cells);
   state.counters["complex_target"] = double(target.complex_cells);
 }

@@ -1,11 +1,33 @@
 #include "kernels/mesh/surface_mesh.hpp"
 
-#include <tbb/parallel_sort.h>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <numeric>
 
 namespace topotrack {
+namespace {
+
+// from_triangles' work arrays, kept per thread from one call to the next: at 100k vertices, first touching
+// fresh pages (page faults) cost more than the grouping itself. Released above kKeepBytes.
+struct Slot {
+  Index b, corner;  // the edge's larger vertex, the corner
+  bool operator<(const Slot& o) const { return b != o.b ? b < o.b : corner < o.corner; }
+};
+struct BuildScratch {
+  static constexpr std::size_t kKeepBytes = std::size_t(64) << 20;
+  std::vector<std::uint32_t> first;
+  std::vector<Slot> slots;
+  std::vector<Halfedge> corner_he;
+  void release_if_large() {
+    if (first.capacity() * 4 + slots.capacity() * sizeof(Slot) + corner_he.capacity() * sizeof(Halfedge) > kKeepBytes)
+      *this = BuildScratch();
+  }
+};
+thread_local BuildScratch build_scratch;
+
+}  // namespace
 
 SurfaceMesh SurfaceMesh::clone() const {
   SurfaceMesh m;
@@ -30,10 +52,11 @@ SurfaceMesh SurfaceMesh::clone() const {
 
 SurfaceMesh SurfaceMesh::from_triangles(std::span<const Vec3> positions,
                                         std::span<const std::array<Index, 3>> triangles,
-                                        std::span<const VertexId> ids) {
+                                        std::span<const VertexId> ids, bool require_closed) {
   const std::size_t nv = positions.size(), nf = triangles.size();
   if (!ids.empty() && ids.size() != nv)
     TT_THROW(InvalidInput, ids.size() << " vertex ids for " << nv << " vertices");
+  if (3 * nf >= std::size_t(kInvalidIndex)) TT_THROW(InvalidInput, nf << " triangles: too many");
   SurfaceMesh m;
   m.vpos_.assign(positions.begin(), positions.end());
   m.vhe_.assign(nv, Halfedge());
@@ -53,66 +76,78 @@ SurfaceMesh SurfaceMesh::from_triangles(std::span<const Vec3> positions,
     if (t[0] == t[1] || t[1] == t[2] || t[2] == t[0])
       TT_THROW(InvalidInput, "triangle " << f << " is degenerate (repeated vertex " << (t[0] == t[1] ? t[0] : t[2]) << ")");
   }
-  // Group the 3 nf directed corner edges by undirected edge: sort keys (min, max, corner).
-  struct Key {
-    Index a, b;  // a < b
-    Index corner;  // 3 f + k: edge from t[k] to t[k+1]
-  };
-  std::vector<Key> keys(3 * nf);
-  for (std::size_t f = 0; f < nf; ++f)
-    for (int k = 0; k < 3; ++k) {
-      const Index u = triangles[f][k], v = triangles[f][(k + 1) % 3];
-      keys[3 * f + k] = Key{std::min(u, v), std::max(u, v), Index(3 * f + k)};
-    }
-  // Keys are unique (each carries its corner), so the parallel sort's order is the one order: deterministic.
-  // It runs on every ConstrainTopology rebuild (~8 % of constrain's CPU at 109k vertices when serial).
-  tbb::parallel_sort(keys.begin(), keys.end(), [](const Key& x, const Key& y) {
-    return std::tie(x.a, x.b, x.corner) < std::tie(y.a, y.b, y.corner);
-  });
-  std::vector<Halfedge> corner_he(3 * nf);
   auto from_of = [&](Index c) { return triangles[c / 3][c % 3]; };
   auto to_of = [&](Index c) { return triangles[c / 3][(c % 3 + 1) % 3]; };
-  std::size_t ne = 0;
-  for (std::size_t i = 0; i < keys.size();) {
-    std::size_t j = i;
-    while (j < keys.size() && keys[j].a == keys[i].a && keys[j].b == keys[i].b) ++j;
-    const std::size_t n = j - i;
-    if (n > 2)
-      TT_THROW(InvalidInput, "non-manifold edge (" << keys[i].a << ", " << keys[i].b << ") shared by " << n
-                                                   << " triangles (" << keys[i].corner / 3 << ", "
-                                                   << keys[i + 1].corner / 3 << ", " << keys[i + 2].corner / 3 << ")");
-    if (n == 2 && from_of(keys[i].corner) == from_of(keys[i + 1].corner)) {
-      const Index f0 = keys[i].corner / 3, f1 = keys[i + 1].corner / 3;
-      auto sorted = [&](Index f) {
-        auto t = triangles[f];
-        std::sort(t.begin(), t.end());
-        return t;
-      };
-      if (sorted(f0) == sorted(f1)) TT_THROW(InvalidInput, "triangles " << f0 << " and " << f1 << " are duplicates");
-      TT_THROW(InvalidInput, "inconsistent orientation: triangles " << f0 << " and " << f1 << " traverse edge ("
-                                                                   << keys[i].a << ", " << keys[i].b
-                                                                   << ") in the same direction");
+  // Group the 3 nf corners (corner 3 f + k: the edge from t[k] to t[k+1]) by undirected edge (a, b), a < b:
+  // a counting sort by a, then each vertex's few corners by (b, corner). Edges are numbered in (a, b) order.
+  // Linear, where a comparison sort of all corners took ~2/3 of this function at 100k vertices.
+  BuildScratch& scratch = build_scratch;
+  std::vector<std::uint32_t>& first = scratch.first;  // after the scatter: corners of a in [first[a], first[a+1])
+  first.assign(nv + 1, 0);
+  for (std::size_t f = 0; f < nf; ++f)
+    for (int k = 0; k < 3; ++k) ++first[std::min(triangles[f][k], triangles[f][(k + 1) % 3])];
+  std::partial_sum(first.begin(), first.end(), first.begin());
+  std::vector<Slot>& slots = scratch.slots;
+  slots.resize(3 * nf);
+  for (std::size_t f = nf; f-- > 0;)  // backwards, so that each vertex's corners come out ascending
+    for (int k = 3; k-- > 0;) {
+      const Index u = triangles[f][k], v = triangles[f][(k + 1) % 3];
+      slots[--first[std::min(u, v)]] = Slot{std::max(u, v), Index(3 * f + k)};
     }
-    const Index e = Index(ne++);
-    corner_he[keys[i].corner] = Halfedge(2 * e);
-    if (n == 2) corner_he[keys[i + 1].corner] = Halfedge(2 * e + 1);
-    i = j;
+  std::vector<Halfedge>& corner_he = scratch.corner_he;
+  corner_he.resize(3 * nf);
+  std::size_t ne = 0;
+  for (Index a = 0; a < nv; ++a) {
+    Slot* const lo = slots.data() + first[a];
+    Slot* const hi = slots.data() + first[a + 1];
+    if (hi - lo > 32) {
+      std::sort(lo, hi);
+    } else {  // corners went in ascending, so sorting by b alone, stably, gives (b, corner) order
+      for (Slot* i = lo + 1; i < hi; ++i)
+        for (Slot* j = i; j > lo && j->b < (j - 1)->b; --j) std::swap(*j, *(j - 1));
+    }
+    for (const Slot* i = lo; i < hi;) {
+      const Slot* j = i;
+      while (j < hi && j->b == i->b) ++j;
+      const std::ptrdiff_t n = j - i;
+      if (n > 2)
+        TT_THROW(InvalidInput, "non-manifold edge (" << a << ", " << i->b << ") shared by " << n << " triangles ("
+                                                     << i[0].corner / 3 << ", " << i[1].corner / 3 << ", "
+                                                     << i[2].corner / 3 << ")");
+      if (n == 2 && from_of(i[0].corner) == from_of(i[1].corner)) {
+        const Index f0 = i[0].corner / 3, f1 = i[1].corner / 3;
+        auto sorted = [&](Index f) {
+          auto t = triangles[f];
+          std::sort(t.begin(), t.end());
+          return t;
+        };
+        if (sorted(f0) == sorted(f1)) TT_THROW(InvalidInput, "triangles " << f0 << " and " << f1 << " are duplicates");
+        TT_THROW(InvalidInput, "inconsistent orientation: triangles " << f0 << " and " << f1 << " traverse edge ("
+                                                                     << a << ", " << i->b << ") in the same direction");
+      }
+      if (n == 1 && require_closed)
+        TT_THROW(InvalidInput, "boundary edge (" << a << ", " << i->b << ") of triangle " << i->corner / 3
+                                                 << " in a mesh required closed");
+      const Index e = Index(ne++);
+      corner_he[i[0].corner] = Halfedge(2 * e);
+      if (n == 2) corner_he[i[1].corner] = Halfedge(2 * e + 1);
+      i = j;
+    }
   }
-  m.hto_.assign(2 * ne, Vertex());
-  m.hnext_.assign(2 * ne, Halfedge());
-  m.hprev_.assign(2 * ne, Halfedge());
+  m.hto_.resize(2 * ne);
+  m.hnext_.resize(2 * ne);
+  m.hprev_.resize(2 * ne);
   m.hface_.assign(2 * ne, Face());
   m.edel_.assign(ne, 0);
   m.fhe_.resize(nf);
   m.fdel_.assign(nf, 0);
-  std::vector<std::uint8_t> used(2 * ne, 0);
   for (std::size_t c = 0; c < 3 * nf; ++c) {
     const Halfedge h = corner_he[c];
     m.hto_[h.idx] = Vertex(to_of(Index(c)));
     m.hto_[h.idx ^ 1u] = Vertex(from_of(Index(c)));
     m.hface_[h.idx] = Face(Index(c / 3));
-    used[h.idx] = 1;
   }
+  auto used = [&](Index h) { return m.hface_[h].is_valid(); };
   for (std::size_t f = 0; f < nf; ++f) {
     m.fhe_[f] = corner_he[3 * f];
     for (int k = 0; k < 3; ++k) m.set_next(corner_he[3 * f + k], corner_he[3 * f + (k + 1) % 3]);
@@ -120,7 +155,7 @@ SurfaceMesh SurfaceMesh::from_triangles(std::span<const Vec3> positions,
   // Outgoing halfedges; boundary ones take precedence and must be unique per vertex.
   for (Index h = 0; h < 2 * ne; ++h) {
     const Vertex from = m.hto_[h ^ 1u];
-    if (!used[h]) {
+    if (!used(h)) {
       if (m.vhe_[from.idx].is_valid() && m.is_boundary(m.vhe_[from.idx]))
         TT_THROW(InvalidInput, "non-manifold vertex " << from.idx << ": several boundary fans meet there");
       m.vhe_[from.idx] = Halfedge(h);
@@ -128,25 +163,38 @@ SurfaceMesh SurfaceMesh::from_triangles(std::span<const Vec3> positions,
       m.vhe_[from.idx] = Halfedge(h);
     }
   }
+  if (require_closed)
+    for (Index v = 0; v < nv; ++v)
+      if (!m.vhe_[v].is_valid()) TT_THROW(InvalidInput, "vertex " << v << " is in no triangle of a mesh required closed");
   // Link boundary halfedges: next of boundary h (a->b) is the boundary halfedge leaving b.
   for (Index h = 0; h < 2 * ne; ++h)
-    if (!used[h]) m.set_next(Halfedge(h), m.vhe_[m.hto_[h].idx]);
-  // Every incident halfedge must be reachable by rotation (one fan per vertex).
-  std::vector<Index> degree(nv, 0), reached(nv, 0);
+    if (!used(h)) m.set_next(Halfedge(h), m.vhe_[m.hto_[h].idx]);
+  // Every incident halfedge must be reachable by rotation (one fan per vertex); in parallel, the smallest
+  // failing vertex reported.
+  std::vector<std::uint32_t>& degree = scratch.first;
+  degree.assign(nv, 0);
   for (Index h = 0; h < 2 * ne; ++h) ++degree[m.hto_[h ^ 1u].idx];
-  for (Index v = 0; v < nv; ++v) {
-    const Halfedge h0 = m.vhe_[v];
-    if (!h0.is_valid()) continue;
-    Halfedge h = h0;
-    Index count = 0;
-    do {
-      ++count;
-      h = m.ccw_rotated(h);
-    } while (h != h0 && count <= degree[v]);
-    if (count != degree[v])
+  constexpr std::size_t kChunk = 8192;
+  std::vector<Index> bad((nv + kChunk - 1) / kChunk, kInvalidIndex);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, bad.size()), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t chunk = r.begin(); chunk != r.end(); ++chunk)
+      for (Index v = Index(chunk * kChunk); v < std::min(nv, (chunk + 1) * kChunk) && bad[chunk] == kInvalidIndex; ++v) {
+        const Halfedge h0 = m.vhe_[v];
+        if (!h0.is_valid()) continue;
+        Halfedge h = h0;
+        Index count = 0;
+        do {
+          ++count;
+          h = m.ccw_rotated(h);
+        } while (h != h0 && count <= degree[v]);
+        if (count != degree[v]) bad[chunk] = v;
+      }
+  });
+  for (Index v : bad)
+    if (v != kInvalidIndex)
       TT_THROW(InvalidInput, "non-manifold vertex " << v << ": " << degree[v] << " edges in more than one fan");
-  }
   m.resize_properties();
+  scratch.release_if_large();
   return m;
 }
 
@@ -257,46 +305,31 @@ Vertex SurfaceMesh::split(Edge e, const Vec3& p, double alpha) {
   const Face f0 = face(h0), f3 = face(o0);
   vhe_[v.idx] = h0;
   hto_[o0.idx] = v;
+  // Cut one triangle (x, x1, x2 then closing, x starting at v) by the spoke s from v to its far corner into
+  // P = (x, x1, -s) and Q = (s, x2, closing); the new face is P or Q, the other keeps `old_face`.
+  auto split_side = [&](Halfedge x, Halfedge x1, Halfedge closing, Face old_face, bool new_is_p) {
+    const Halfedge x2 = next(x1);
+    const Halfedge s = new_edge(v, to_vertex(x1)), ts = opposite(s);
+    const Face fn = new_face(new_is_p ? x1 : x2);
+    const Face fp = new_is_p ? fn : old_face, fq = new_is_p ? old_face : fn;
+    fhe_[old_face.idx] = new_is_p ? closing : x;
+    hface_[x.idx] = hface_[x1.idx] = hface_[ts.idx] = fp;
+    hface_[s.idx] = hface_[x2.idx] = hface_[closing.idx] = fq;
+    set_next(x, x1);
+    set_next(x1, ts);
+    set_next(ts, x);
+    set_next(s, x2);
+    set_next(x2, closing);
+    set_next(closing, s);
+  };
   if (!is_boundary(h0)) {
-    const Halfedge h1 = next(h0), h2 = next(h1);
-    const Vertex v1 = to_vertex(h1);
-    const Halfedge e0 = new_edge(v, v1), t0 = opposite(e0);
-    const Face f1 = new_face(h2);
-    fhe_[f0.idx] = h0;
-    hface_[h1.idx] = f0;
-    hface_[t0.idx] = f0;
-    hface_[h0.idx] = f0;
-    hface_[h2.idx] = f1;
-    hface_[t1.idx] = f1;
-    hface_[e0.idx] = f1;
-    set_next(h0, h1);
-    set_next(h1, t0);
-    set_next(t0, h0);
-    set_next(e0, h2);
-    set_next(h2, t1);
-    set_next(t1, e0);
+    split_side(h0, next(h0), t1, f0, false);
   } else {
     set_next(prev(h0), t1);
     set_next(t1, h0);
   }
   if (!is_boundary(o0)) {
-    const Halfedge o1 = next(o0), o2 = next(o1);
-    const Vertex v3 = to_vertex(o1);
-    const Halfedge e2 = new_edge(v, v3), t2 = opposite(e2);
-    const Face f2 = new_face(o1);
-    fhe_[f3.idx] = o0;
-    hface_[o1.idx] = f2;
-    hface_[t2.idx] = f2;
-    hface_[e1.idx] = f2;
-    hface_[o2.idx] = f3;
-    hface_[o0.idx] = f3;
-    hface_[e2.idx] = f3;
-    set_next(e1, o1);
-    set_next(o1, t2);
-    set_next(t2, e1);
-    set_next(o0, e2);
-    set_next(e2, o2);
-    set_next(o2, o0);
+    split_side(e1, next(o0), o0, f3, true);
   } else {
     set_next(e1, next(o0));
     set_next(o0, e1);

@@ -131,13 +131,16 @@ public:
   //! An explicit deep copy (the mesh is move-only to avoid accidental copies of large data).
   SurfaceMesh clone() const;
 
-  //! Build from an indexed triangle list. Open boundaries are allowed; ids, when given, are the
-  //! persistent vertex ids (fresh ids continue after the largest).
+  //! Build from an indexed triangle list. Open boundaries are allowed unless require_closed; ids, when
+  //! given, are the persistent vertex ids (fresh ids continue after the largest). Edges are numbered in
+  //! the order of their (smaller, larger) vertex index pair. A mesh it returns passes validate(false),
+  //! and validate(true) as well when built with require_closed: no separate validation is needed.
   //! \throw InvalidInput on an index out of range, a degenerate triangle (repeated index), an edge
   //! shared by more than two triangles, inconsistent orientation, a duplicated triangle or a
-  //! non-manifold vertex; the message names the triangle or vertex.
+  //! non-manifold vertex, and with require_closed on a boundary edge or a vertex in no triangle; the
+  //! message names the triangle, edge or vertex.
   static SurfaceMesh from_triangles(std::span<const Vec3> positions, std::span<const std::array<Index, 3>> triangles,
-                                    std::span<const VertexId> ids = {});
+                                    std::span<const VertexId> ids = {}, bool require_closed = false);
 
   // Sizes: allocated elements, including deleted ones until compact().
   std::size_t vertices_size() const { return vpos_.size(); }

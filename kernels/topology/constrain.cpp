@@ -149,8 +149,9 @@ ConstrainReport constrain_topology(SurfaceMesh& mesh, const openvdb::FloatGrid& 
       for (std::size_t i = 0; i < A.n_kept(); ++i) ids[i] = mesh.id(Vertex(A.kept_old[i]));
       for (std::size_t i = A.n_kept(); i < ids.size(); ++i) ids[i] = mesh.next_id() + (i - A.n_kept());
       try {
-        result = SurfaceMesh::from_triangles(A.positions, A.triangles, ids);
-        result.validate(true);
+        // Closed, manifold, consistently oriented: from_triangles' checks with require_closed are all of
+        // validate(true)'s (surface_mesh.hpp), so no separate pass over the result.
+        result = SurfaceMesh::from_triangles(A.positions, A.triangles, ids, true);
         result.set_next_id(mesh.next_id() + (ids.size() - A.n_kept()));
       } catch (const Error& e) {
         ok = false;
@@ -211,13 +212,13 @@ ConstrainReport constrain_topology(SurfaceMesh& mesh, const openvdb::FloatGrid& 
   {
     std::vector<std::uint32_t> adj_begin;
     std::vector<Index> adj;
-    mesh_adjacency(mesh, adj_begin, adj);
     std::vector<std::uint8_t> gone(mesh.vertices_size(), 0);
     for (Index v : A.deleted_old) gone[v] = 1;
+    mesh_adjacency(mesh, gone, adj_begin, adj);  // the march reads the patch vertices' rows only
     W.deleted = march_patches(gone, adj_begin, adj);
-    mesh_adjacency(result, adj_begin, adj);
     std::vector<std::uint8_t> fresh(result.vertices_size(), 0);
     for (std::size_t i = A.n_kept() + A.n_derived(); i < fresh.size(); ++i) fresh[i] = 1;
+    mesh_adjacency(result, fresh, adj_begin, adj);
     W.created = march_patches(fresh, adj_begin, adj);
   }
   if (events && params.record_events) record(mesh, result, A, W, *events);

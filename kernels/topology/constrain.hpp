@@ -19,8 +19,8 @@
 //!     uses M's own crossing point as its vertex on every lattice edge that touches a simple cell, and
 //!     along a face shared with a simple cell it follows M's cut curve instead of the straight segment;
 //!     polygons that picked up curve points are fanned from a new centroid vertex. The result is a
-//!     closed, oriented 2-manifold by construction; it is checked (SurfaceMesh::from_triangles and
-//!     validate), and should a check ever fail the complex region is grown by one cell layer and the
+//!     closed, oriented 2-manifold by construction; it is checked (SurfaceMesh::from_triangles with
+//!     require_closed, whose checks amount to validate(true)), and should a check ever fail the complex region is grown by one cell layer and the
 //!     replacement redone, up to `max_region_growth` times. No slivers where avoidable: M's vertices are
 //!     pushed kSnap voxels off the lattice planes before cutting, patch vertices stay kSnap off the lattice
 //!     nodes, kept pieces are fanned from their widest corner, the cells of tiny kept pieces join the
@@ -69,7 +69,7 @@ struct ConstrainReport {
   double seconds_classify = 0;  //!< cutting and classification
   double seconds_replace = 0;   //!< removal, marching-cubes patch, stitching, rebuild, sliver rounds:
   double seconds_assemble = 0;  //!<   assemble() over all attempts and sliver rounds
-  double seconds_rebuild = 0;   //!<   SurfaceMesh::from_triangles + validate over all attempts
+  double seconds_rebuild = 0;   //!<   SurfaceMesh::from_triangles (closed) over all attempts
   double seconds_slivers = 0;   //!<   absorb_sliver_pieces / absorb_sliver_triangles / grow_region
   int assemblies = 0;           //!<   replacements built (first, growths, sliver rounds)
   double seconds_components = 0;  //!< connected components before and after

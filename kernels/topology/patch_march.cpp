@@ -4,20 +4,36 @@
 
 namespace topotrack::topology {
 
-void mesh_adjacency(const SurfaceMesh& mesh, std::vector<std::uint32_t>& adj_begin, std::vector<Index>& adj) {
+namespace {
+
+void adjacency_rows(const SurfaceMesh& mesh, const std::vector<std::uint8_t>* rows, std::vector<std::uint32_t>& adj_begin,
+                    std::vector<Index>& adj) {
   const std::size_t nv = mesh.vertices_size();
   adj_begin.assign(nv + 1, 0);
   adj.clear();
-  adj.reserve(mesh.n_edges() * 2);
+  if (!rows) adj.reserve(mesh.n_edges() * 2);
   std::vector<Vertex> ring;
   for (std::size_t v = 0; v < nv; ++v) {
     const Vertex vh(static_cast<Index>(v));
-    if (!mesh.is_deleted(vh) && !mesh.is_isolated(vh)) {
+    if ((!rows || (*rows)[v]) && !mesh.is_deleted(vh) && !mesh.is_isolated(vh)) {
       mesh.one_ring(vh, ring);
       for (Vertex w : ring) adj.push_back(w.idx);
     }
     adj_begin[v + 1] = std::uint32_t(adj.size());
   }
+}
+
+}  // namespace
+
+void mesh_adjacency(const SurfaceMesh& mesh, std::vector<std::uint32_t>& adj_begin, std::vector<Index>& adj) {
+  adjacency_rows(mesh, nullptr, adj_begin, adj);
+}
+
+void mesh_adjacency(const SurfaceMesh& mesh, const std::vector<std::uint8_t>& rows, std::vector<std::uint32_t>& adj_begin,
+                    std::vector<Index>& adj) {
+  if (rows.size() != mesh.vertices_size())
+    TT_THROW(InvalidInput, "mesh_adjacency: " << rows.size() << " row flags for " << mesh.vertices_size() << " vertices");
+  adjacency_rows(mesh, &rows, adj_begin, adj);
 }
 
 std::vector<MarchedPatch> march_patches(const std::vector<std::uint8_t>& in_patch,

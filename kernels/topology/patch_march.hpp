@@ -26,5 +26,10 @@ std::vector<MarchedPatch> march_patches(const std::vector<std::uint8_t>& in_patc
 
 //! CSR adjacency of the live vertices of a mesh (neighbours in one-ring order).
 void mesh_adjacency(const SurfaceMesh& mesh, std::vector<std::uint32_t>& adj_begin, std::vector<Index>& adj);
+//! The same with rows only for the vertices with rows[v] (the others get an empty row): all that
+//! march_patches reads when rows is its in_patch, at a cost proportional to the patches, not the mesh.
+//! \throw InvalidInput when rows does not have one flag per vertex (vertices_size()).
+void mesh_adjacency(const SurfaceMesh& mesh, const std::vector<std::uint8_t>& rows, std::vector<std::uint32_t>& adj_begin,
+                    std::vector<Index>& adj);
 
 }  // namespace topotrack::topology

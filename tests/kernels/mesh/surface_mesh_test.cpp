@@ -2,7 +2,11 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <random>
+#include <string>
+#include <utility>
 
 #include "kernels/mesh/mesh_queries.hpp"
 #include "tests/support/test_meshes.hpp"
@@ -61,6 +65,125 @@ TEST(SurfaceMesh, RejectsBrokenSoups) {
       for (auto& i : t)
         if (i == 4) i = 0;
     EXPECT_THROW(s.mesh(), InvalidInput);
+  }
+}
+
+// A closed double cone: apexes 0 and 1 over a ring of n vertices (apex valence n: more than the 32 corners
+// from_triangles sorts by insertion).
+test::Soup double_cone(int n) {
+  test::Soup s;
+  s.positions = {Vec3(0, 0, 1), Vec3(0, 0, -1)};
+  for (int i = 0; i < n; ++i) s.positions.emplace_back(std::cos(2 * M_PI * i / n), std::sin(2 * M_PI * i / n), 0);
+  for (int i = 0; i < n; ++i) {
+    const Index a = Index(2 + i), b = Index(2 + (i + 1) % n);
+    s.triangles.push_back({0, a, b});
+    s.triangles.push_back({1, b, a});
+  }
+  return s;
+}
+
+// Whether building with require_closed accepts the soup, and whether the reference (build, then the full
+// validate(true)) does.
+std::pair<bool, bool> closed_build_and_reference(const test::Soup& s) {
+  bool closed_ok = true, reference_ok = true;
+  try {
+    SurfaceMesh::from_triangles(s.positions, s.triangles, {}, true);
+  } catch (const InvalidInput&) {
+    closed_ok = false;
+  }
+  try {
+    s.mesh().validate(true);
+  } catch (const Error&) {
+    reference_ok = false;
+  }
+  return {closed_ok, reference_ok};
+}
+
+TEST(SurfaceMesh, ClosedBuildAcceptsExactlyWhatValidateAccepts) {
+  std::vector<std::pair<std::string, test::Soup>> soups = {
+      {"tetrahedron", test::tetrahedron()}, {"icosphere", test::icosphere(3)},  {"torus", test::torus(16, 9)},
+      {"two spheres", test::merge(test::icosphere(1), test::icosphere(2, 1.0, Vec3(3, 0, 0)))},
+      {"double cone", double_cone(40)},     {"open box", test::open_box()}};
+  {
+    auto s = test::icosphere(2);
+    s.positions.emplace_back(5, 5, 5);  // a vertex in no triangle
+    soups.emplace_back("unused vertex", s);
+  }
+  {
+    auto s = test::icosphere(2);
+    s.triangles.erase(s.triangles.begin() + 17);  // a hole
+    soups.emplace_back("hole", s);
+  }
+  {
+    auto s = test::merge(test::tetrahedron(), test::tetrahedron());  // closed, but vertex 0 joins two fans
+    for (auto& t : s.triangles)
+      for (auto& i : t)
+        if (i == 4) i = 0;
+    soups.emplace_back("pinched", s);
+  }
+  {
+    auto s = double_cone(40);  // both apexes' fans touch at a ring vertex: two cones sharing vertex 2
+    auto t = double_cone(40);
+    for (auto& p : t.positions) p.x() += 2;
+    s = test::merge(s, t);
+    for (auto& tri : s.triangles)
+      for (auto& i : tri)
+        if (i == 42 + 2 + 20) i = 2;
+    soups.emplace_back("cones sharing a rim vertex", s);
+  }
+  {
+    auto s = test::icosphere(2);
+    std::swap(s.triangles[5][0], s.triangles[5][1]);
+    soups.emplace_back("flipped triangle", s);
+  }
+  int accepted = 0;
+  for (const auto& [name, s] : soups) {
+    const auto [closed_ok, reference_ok] = closed_build_and_reference(s);
+    EXPECT_EQ(closed_ok, reference_ok) << name;
+    accepted += closed_ok;
+  }
+  EXPECT_EQ(accepted, 5);
+  EXPECT_THROW(SurfaceMesh::from_triangles(test::open_box().positions, test::open_box().triangles, {}, true), InvalidInput);
+}
+
+TEST(SurfaceMesh, ClosedBuildRejectsEveryRemovedTriangleAndUnusedVertex) {
+  const test::Soup base = test::icosphere(1);
+  for (std::size_t f = 0; f < base.triangles.size(); ++f) {
+    auto s = base;
+    s.triangles.erase(s.triangles.begin() + std::ptrdiff_t(f));
+    EXPECT_THROW(SurfaceMesh::from_triangles(s.positions, s.triangles, {}, true), InvalidInput) << f;
+    EXPECT_NO_THROW(s.mesh().validate(false)) << f;
+  }
+  // Every triangle of one vertex's fan removed: the hole, and then the vertex itself, are rejected.
+  auto s = base;
+  std::erase_if(s.triangles, [](const auto& t) { return t[0] == 0 || t[1] == 0 || t[2] == 0; });
+  EXPECT_THROW(SurfaceMesh::from_triangles(s.positions, s.triangles, {}, true), InvalidInput);
+}
+
+TEST(SurfaceMesh, EdgesAreNumberedByVertexPair) {
+  // Edge e joins the e-th smallest (min, max) vertex pair; its halfedge 0 is in the lower-numbered triangle.
+  for (const auto& soup : {test::icosphere(3), test::torus(20, 7), double_cone(50), test::open_box()}) {
+    auto s = soup;
+    std::mt19937 rng(3);
+    std::shuffle(s.triangles.begin(), s.triangles.end(), rng);
+    for (auto& t : s.triangles) std::rotate(t.begin(), t.begin() + rng() % 3, t.end());
+    const SurfaceMesh m = s.mesh();
+    ASSERT_NO_THROW(m.validate(false));
+    std::vector<std::pair<Index, Index>> pairs;
+    for (const auto& t : s.triangles)
+      for (int k = 0; k < 3; ++k) pairs.emplace_back(std::min(t[k], t[(k + 1) % 3]), std::max(t[k], t[(k + 1) % 3]));
+    std::sort(pairs.begin(), pairs.end());
+    pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
+    ASSERT_EQ(m.edges_size(), pairs.size());
+    for (Index e = 0; e < m.edges_size(); ++e) {
+      const Index a = m.vertex(Edge(e), 0).idx, b = m.vertex(Edge(e), 1).idx;
+      EXPECT_EQ(std::make_pair(std::min(a, b), std::max(a, b)), pairs[e]) << e;
+      const Face f0 = m.face(m.halfedge(Edge(e), 0)), f1 = m.face(m.halfedge(Edge(e), 1));
+      ASSERT_TRUE(f0.is_valid());
+      if (f1.is_valid()) {
+        EXPECT_LT(f0.idx, f1.idx);
+      }
+    }
   }
 }
 
