@@ -19,21 +19,6 @@ namespace {
 using Clock = std::chrono::steady_clock;
 double since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
-//! Positions keyed by persistent id, to carry the previous frame's positions through the events.
-IdField positions_by_id(const SurfaceMesh& m) {
-  IdField f;
-  f.width = 3;
-  f.ids.reserve(m.n_vertices());
-  f.values.reserve(3 * m.n_vertices());
-  for (Index i = 0; i < m.vertices_size(); ++i) {
-    const Vertex v(i);
-    if (m.is_deleted(v)) continue;
-    f.ids.push_back(m.id(v));
-    for (int c = 0; c < 3; ++c) f.values.push_back(float(m.position(v)[c]));
-  }
-  return f;
-}
-
 }  // namespace
 
 struct Tracker::Impl {
@@ -116,7 +101,7 @@ struct Tracker::Impl {
 
   void next_frame(PreparedFrame& frame) {
     const SurfaceMesh& target = frame.surface;
-    const IdField before = positions_by_id(mesh);
+    const IdField before = position_field(mesh);
     if (mesh.n_faces() > 0 && target.n_faces() > 0) {
       if (!frame.target) frame.target = std::make_unique<TargetSurface>(TargetSurface::from_mesh(target));
       const TargetSurface& surface = *frame.target;

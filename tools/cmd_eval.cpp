@@ -166,12 +166,7 @@ void run_eval(const EvalOptions& opt) {
     if (k > 0 && fs::exists(ev_path)) events = read_events(ev_path);
     if (k == 0) {
       first_number = of.number;
-      IdField f;
-      f.width = 3;
-      f.ids = live_ids(tracked);
-      for (const Vec3& p : live_positions(tracked))
-        for (int c = 0; c < 3; ++c) f.values.push_back(float(p[c]));
-      material = IdTable::from_field(f);
+      material = IdTable::from_field(position_field(tracked));
     } else {
       propagate_forward(events, material);
     }

@@ -4,8 +4,23 @@
 #include <map>
 
 #include "io/error.hpp"
+#include "kernels/mesh/surface_mesh.hpp"
 
 namespace topotrack {
+
+IdField position_field(const SurfaceMesh& mesh) {
+  IdField f;
+  f.width = 3;
+  f.ids.reserve(mesh.n_vertices());
+  f.values.reserve(3 * std::size_t(mesh.n_vertices()));
+  for (Index i = 0; i < mesh.vertices_size(); ++i) {
+    const Vertex v(i);
+    if (mesh.is_deleted(v)) continue;
+    f.ids.push_back(mesh.id(v));
+    for (int c = 0; c < 3; ++c) f.values.push_back(float(mesh.position(v)[c]));
+  }
+  return f;
+}
 
 // IdTable ------------------------------------------------------------------------------------------
 

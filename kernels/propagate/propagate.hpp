@@ -19,6 +19,11 @@ struct IdField {
   std::vector<float> values;
 };
 
+class SurfaceMesh;
+//! The live vertices' positions keyed by their persistent ids (width 3, in vertex order): what §4.6
+//! carries through an event list to tell where each vertex was a frame earlier.
+IdField position_field(const SurfaceMesh& mesh);
+
 //! Id -> values table used while propagating. Ids are mostly dense integers from a counter, so they
 //! index a vector directly; an id far beyond the ids seen (more than 4x the table size plus 2^20)
 //! goes to a hash map instead, so huge ids cost no memory.

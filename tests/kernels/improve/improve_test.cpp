@@ -179,19 +179,6 @@ TEST(Improve, RemovesFolds) {
   EXPECT_EQ(genus(out), 0);
 }
 
-//! Positions by id, as the float field propagation works on.
-IdField position_field(const SurfaceMesh& m) {
-  IdField f;
-  f.width = 3;
-  for (Index i = 0; i < m.vertices_size(); ++i) {
-    const Vertex v(i);
-    if (m.is_deleted(v)) continue;
-    f.ids.push_back(m.id(v));
-    for (int c = 0; c < 3; ++c) f.values.push_back(float(m.position(v)[c]));
-  }
-  return f;
-}
-
 TEST(Improve, EventsReplayForwardReproducesPositions) {
   // Every vertex improve_mesh creates sits at the midpoint of the two it comes from (split: the edge's
   // end points; collapse: the collapsed pair), exactly what the §4.4 rules say: positions are linear data,
