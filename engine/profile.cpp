@@ -27,7 +27,7 @@ std::vector<Binding> bindings(TrackerParams& p) {
   return {
       {"tracker.edge_length", &p.edge_length, -inf, inf},
       {"tracker.voxel_size_factor", &p.voxel_size_factor, 1e-3, 1e3},
-      {"tracker.sdf_half_width", &p.sdf_half_width, 1.5, 64},
+      {"tracker.sdf_half_width", &p.sdf_half_width, 1.75, 64},  // below √3 cells lose corner values
       {"tracker.topology_tolerance", &p.topology_tolerance, 0, 2},
       {"tracker.exact_sign_band", &p.exact_sign_band, 0, 3},
       {"tracker.coarse", &p.coarse},

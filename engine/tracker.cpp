@@ -51,7 +51,9 @@ struct Tracker::Impl {
     EventList ev;
     std::size_t cells = 0;
     try {
-      cells = constrain_topology(mesh, theta, params.constrain, &ev).complex_cells;
+      ConstrainParams cp = params.constrain;
+      cp.count_components = false;  // not reported per frame
+      cells = constrain_topology(mesh, theta, cp, &ev).complex_cells;
       events.append(ev);
     } catch (const TopologyError& e) {
       ++report.topology_failures;

@@ -9,11 +9,13 @@
 #include <chrono>
 #include <cmath>
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include <immintrin.h>
 
 #include "io/error.hpp"
+#include "kernels/mesh/radix_sort.hpp"
 #include "kernels/sdf/signed_distance.hpp"
 
 namespace topotrack {
@@ -326,7 +328,10 @@ openvdb::FloatGrid::Ptr narrow_band_signed_distance(std::span<const Vec3> positi
       std::vector<std::uint64_t>().swap(c);
     }
   }
-  tbb::parallel_sort(pairs.begin(), pairs.end());
+  {
+    const std::unique_ptr<std::uint64_t[]> scratch(new std::uint64_t[pairs.size()]);  // left unwritten
+    radix_sort(pairs, {scratch.get(), pairs.size()});
+  }
   std::vector<std::size_t> block_begin;
   for (std::size_t i = 0; i < pairs.size(); ++i)
     if (i == 0 || (pairs[i] >> 32) != (pairs[i - 1] >> 32)) block_begin.push_back(i);

@@ -11,6 +11,7 @@
 #include <tbb/parallel_reduce.h>
 #include <tbb/parallel_sort.h>
 
+#include "kernels/mesh/radix_sort.hpp"
 #include "kernels/sdf/cube_table.hpp"
 #include "kernels/topology/classify_fast.hpp"
 
@@ -346,7 +347,10 @@ HugeVector<CellPiece> pieces_by_cell(const LatticeCut& cut) {
                   shl((k & kField) - range[2], sp) | std::uint64_t(i);
     }
   });
-  tbb::parallel_sort(packed.begin(), packed.end());
+  {
+    HugeVector<std::uint64_t> scratch(np);
+    radix_sort(packed, scratch);
+  }
   const std::uint64_t piece_mask = wp == 64 ? ~std::uint64_t(0) : (std::uint64_t(1) << wp) - 1;
   auto field = [](std::uint64_t v, int shift, int bits) {
     return bits == 0 || shift >= 64 ? std::uint64_t(0) : (v >> shift) & ((std::uint64_t(1) << bits) - 1);
@@ -423,7 +427,10 @@ CellIndex index_cells(const LatticeCut& cut, const openvdb::FloatGrid& theta) {
     const openvdb::Coord n = cell_from_key(near[i]);
     for (int d = 0; d < 8; ++d) sign_cells.push_back(cell_key(n.offsetBy(-(d & 1), -((d >> 1) & 1), -((d >> 2) & 1))));
   }
-  tbb::parallel_sort(sign_cells.begin(), sign_cells.end());
+  {
+    HugeVector<std::uint64_t> scratch(sign_cells.size());
+    radix_sort(sign_cells, scratch);
+  }
   sign_cells.erase(std::unique(sign_cells.begin(), sign_cells.end()), sign_cells.end());
 
   idx.cells.reserve(sign_cells.size() + np / 2);

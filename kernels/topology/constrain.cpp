@@ -111,17 +111,15 @@ ConstrainReport constrain_topology(SurfaceMesh& mesh, const openvdb::FloatGrid& 
   std::vector<std::uint64_t> region = complex_cells(mesh, cut, index, theta);
   report.bad_faces = cut.bad_faces.size();
   report.seconds_classify = since(t0);
-  if (region.empty()) {
-    const auto tc = Clock::now();
-    report.components_before = report.components_after = int(connected_components(mesh));
-    report.seconds_components = since(tc);
-    report.seconds_total = since(t0);
-    return report;
-  }
-  {
+  if (params.count_components) {
     const auto tc = Clock::now();
     report.components_before = int(connected_components(mesh));
     report.seconds_components = since(tc);
+  }
+  if (region.empty()) {
+    report.components_after = report.components_before;
+    report.seconds_total = since(t0);
+    return report;
   }
   auto timed = [](double& acc, auto&& f) {
     const auto ts = Clock::now();
@@ -239,7 +237,7 @@ ConstrainReport constrain_topology(SurfaceMesh& mesh, const openvdb::FloatGrid& 
   report.patches_created = W.created.size();
   report.patches_deleted = W.deleted.size();
   mesh = std::move(result);
-  {
+  if (params.count_components) {
     const auto tc = Clock::now();
     report.components_after = int(connected_components(mesh));
     report.seconds_components += since(tc);

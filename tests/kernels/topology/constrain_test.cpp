@@ -299,6 +299,51 @@ TEST(ConstrainTopology, IdenticalWithOneThreadOrMany) {
   EXPECT_TRUE(run(1) == run(4));
 }
 
+// ConstrainTopology reads Θ's values only within a cell diagonal (√3 voxels) of its zero set, its sign
+// elsewhere: a band of 1.75 voxels (the tracker's sdf_half_width) gives the same result, events and ids as
+// one of 3, both against the next frame (splits, merges) and against M's own distance (self-intersections).
+TEST(ConstrainTopology, SameResultWithABandJustBeyondTheCellDiagonal) {
+  SyntheticParams sp;
+  sp.kind = SyntheticKind::kMetaballs;
+  sp.frames = 6;
+  const SyntheticScene scene(sp);
+  std::size_t complex = 0;
+  for (int n = 1; n < sp.frames; ++n) {
+    const SurfaceMesh next = to_surface_mesh(scene.frame_mesh(n + 1));
+    for (bool self : {false, true}) {
+      auto run = [&](double half_width) {
+        SurfaceMesh m = to_surface_mesh(scene.frame_mesh(n));
+        const GridPtr theta = signed_distance(self ? m : next, scene.voxel_size(), half_width, 0.25);
+        EventList ev;
+        const ConstrainReport r = constrain_topology(m, *theta, {}, &ev);
+        complex += r.complex_cells;
+        std::vector<Vec3> P;
+        std::vector<std::array<Index, 3>> T;
+        extract_triangles(m, P, T);
+        return std::tuple(P, T, m.ids(), ev, r.complex_cells);
+      };
+      SCOPED_TRACE("frame " + std::to_string(n) + (self ? " against itself" : " against the next"));
+      EXPECT_TRUE(run(1.75) == run(3.0));
+    }
+  }
+  EXPECT_GT(complex, 0u);
+}
+
+TEST(ConstrainTopology, CountsComponentsOnlyWhenAsked) {
+  SurfaceMesh m = test::icosphere(4, 0.5).mesh();
+  const GridPtr two = unite(sphere(0.3, Vec3(-0.4, 0, 0), 0.05), sphere(0.3, Vec3(0.4, 0, 0), 0.05));
+  ConstrainParams p;
+  p.count_components = false;
+  SurfaceMesh a = m.clone();
+  const ConstrainReport r = constrain_topology(a, *two, p);
+  EXPECT_EQ(r.components_before, 0);
+  EXPECT_EQ(r.components_after, 0);
+  EXPECT_EQ(connected_components(a), 2u);
+  const ConstrainReport q = constrain_topology(m, *two);
+  EXPECT_EQ(q.components_before, 1);
+  EXPECT_EQ(q.components_after, 2);
+}
+
 TEST(ConstrainTopology, ThrowsOnBadInput) {
   SurfaceMesh m = test::icosphere(2).mesh();
   GridPtr theta = sphere(0.5, Vec3::Zero(), 0.05);
