@@ -1,9 +1,10 @@
 #pragma once
 //! Parallel least-significant-digit radix sort of 64-bit keys, for the big key arrays of ConstrainTopology
-//! (the cut's (cell, piece) words: 0.8 M keys at 109k vertices) and of the narrow-band signed distance. Written by hand because nothing in Debian's
-//! libraries sorts integers in parallel this way: tbb::parallel_sort compares (65 ms for those keys on this
-//! machine), Boost's spreadsort is sequential (25 ms); this takes 10–20 ms. The result is the sorted order,
-//! so it does not depend on the thread count; the digits are split over fixed chunks of the input.
+//! (the cut's (cell, piece) words: 0.8 M keys at 109k vertices) and of the narrow-band signed distance.
+//! Written by hand because nothing in Debian's libraries sorts integers in parallel this way
+//! (tbb::parallel_sort compares, Boost's spreadsort is sequential); in place of tbb::parallel_sort it took
+//! `constrain_bench --benchmark_filter=BM_IndexCells/300` from 103–123 to 75–98 ms (load 4). The result is
+//! the sorted order, so it does not depend on the thread count; the digits are split over fixed chunks.
 #include <cstddef>
 #include <cstdint>
 #include <span>
