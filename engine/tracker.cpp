@@ -43,8 +43,9 @@ struct Tracker::Impl {
     report.seconds.improve += since(t0);
   }
 
-  //! ConstrainTopology(M, Θ) (§4.3), timed into the topology column.
-  std::size_t constrain(const openvdb::FloatGrid& theta) {
+  //! ConstrainTopology(M, Θ) (§4.3), timed into the topology column. Returns the number of complex cells
+  //! and sets `reasons`.
+  std::size_t constrain(const openvdb::FloatGrid& theta, topology::VerdictCounts& reasons) {
     const auto t0 = Clock::now();
     // A failed local replacement leaves M as it was (constrain_topology commits only a valid result):
     // the frame goes on without this topology step, and the failure is reported, not hidden.
@@ -53,7 +54,9 @@ struct Tracker::Impl {
     try {
       ConstrainParams cp = params.constrain;
       cp.count_components = false;  // not reported per frame
-      cells = constrain_topology(mesh, theta, cp, &ev).complex_cells;
+      const ConstrainReport r = constrain_topology(mesh, theta, cp, &ev);
+      cells = r.complex_cells;
+      reasons = r.cells_by_verdict;
       events.append(ev);
     } catch (const TopologyError& e) {
       ++report.topology_failures;
@@ -131,7 +134,7 @@ struct Tracker::Impl {
       openvdb::FloatGrid::Ptr phi_m;
       if (mesh.n_faces() > 0) {
         phi_m = distance(mesh);                               // line 8
-        report.complex_cells_self = constrain(*phi_m);       // line 9
+        report.complex_cells_self = constrain(*phi_m, report.complex_reasons_self);  // line 9
       }
       openvdb::FloatGrid::Ptr phi_s;                          // line 10, usually done by prepare
       if (frame.phi && frame.voxel_size == voxel_size) phi_s = std::move(frame.phi);
@@ -141,7 +144,7 @@ struct Tracker::Impl {
         agree_near_surface(*phi_s, *phi_m, params.topology_tolerance * voxel_size);
         report.seconds.topology += since(t0);
       }
-      report.complex_cells_target = constrain(*phi_s);       // line 11
+      report.complex_cells_target = constrain(*phi_s, report.complex_reasons_target);  // line 11
     }
     if (mesh.n_faces() > 0) improve(&events);  // line 12
 

@@ -47,6 +47,8 @@ struct FrameReport {
   long euler = 0;
   std::vector<std::size_t> events_by_kind;  //!< indexed by int(EventKind) - 1
   std::size_t complex_cells_self = 0, complex_cells_target = 0;  //!< ConstrainTopology(M, φ_M) and (M, φ_S)
+  //! Why cells were complex in those two calls (ConstrainReport::cells_by_verdict).
+  topology::VerdictCounts complex_reasons_self{}, complex_reasons_target{};
   int coarse_iterations = 0, fine_iterations = 0;
   int coarse_pass_iterations = 0;  //!< rounds of the low-density large-motion pass (0: it did not run)
   //! ConstrainTopology calls that could not produce a valid mesh and were skipped (M kept as it was).

@@ -85,4 +85,11 @@ double median(std::vector<double> v) {
   return v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]);
 }
 
+nlohmann::json complex_reasons_json(const topology::VerdictCounts& counts) {
+  nlohmann::json j = nlohmann::json::object();
+  for (int k = 1; k < topology::kVerdictKinds; ++k)
+    if (counts[k] > 0) j[topology::verdict_name(topology::CellVerdict(k))] = counts[k];
+  return j;
+}
+
 }  // namespace topotrack::cli

@@ -5,8 +5,11 @@
 #include <string>
 #include <vector>
 
+#include <nlohmann/json.hpp>
+
 #include "io/mesh_data.hpp"
 #include "kernels/mesh/surface_mesh.hpp"
+#include "kernels/topology/classify.hpp"
 #include "kernels/propagate/tracked_sequence.hpp"
 
 namespace topotrack::cli {
@@ -40,6 +43,10 @@ SurfaceMesh load_surface_mesh(const std::filesystem::path& path, bool require_cl
 
 //! Create the output folder (and parents). \throw IoError naming it.
 void ensure_directory(const std::filesystem::path& dir);
+
+//! The non-zero counts of complex cells by verdict, keyed by verdict name (the complex_by_reason of
+//! `constrain --json` and of track.json).
+nlohmann::json complex_reasons_json(const topology::VerdictCounts& counts);
 
 //! Median of the values (0 for none): what every per-frame summary of the CLI reports.
 double median(std::vector<double> values);

@@ -72,6 +72,7 @@ void run_constrain(const ConstrainOptions& opt) {
     j["vertices_in"] = vertices_in;
     j["vertices_out"] = mesh.n_vertices();
     j["complex_cells"] = r.complex_cells;
+    j["complex_by_reason"] = complex_reasons_json(r.cells_by_verdict);  // before any growth
     j["faces_removed"] = r.faces_removed;
     j["faces_added"] = r.faces_added;
     j["vertices_removed"] = r.vertices_removed;

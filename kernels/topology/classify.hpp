@@ -11,6 +11,7 @@
 //!  - no two of M's cut curves cross on a cube face (two sheets of M intersecting in the cell).
 //! Anything else, including a cell that Θ crosses and M misses, is complex. Being conservative costs
 //! only resampling.
+#include <array>
 #include <cstdint>
 #include <openvdb/openvdb.h>
 #include <vector>
@@ -68,7 +69,16 @@ enum class CellVerdict : std::uint8_t {
   kUnmatchedLoop,  //!< a boundary loop runs through other cube edges than any polygon of Θ
   kNotDisk,        //!< a component of M ∩ cell is not a disk with one boundary loop
   kCurvesCross,    //!< two of M's cut curves cross on a cube face
+  //! A boundary loop runs through other cube edges than any polygon of Θ because it crosses one cube edge
+  //! twice: M grazes a lattice edge (a near-tangency or a part thinner than a voxel). Otherwise as
+  //! kUnmatchedLoop, which it refines.
+  kEdgeCrossedTwice,
 };
+inline constexpr int kVerdictKinds = 11;
+//! A short lower-case name of a verdict ("simple", "missed", ..., "edge_crossed_twice"), for reports.
+const char* verdict_name(CellVerdict v);
+//! Cells counted by verdict (index: int(CellVerdict)).
+using VerdictCounts = std::array<std::uint32_t, kVerdictKinds>;
 
 //! Which implementation of the per-cell test runs. Both give the same verdict for every cell (tested):
 //! kFast (classify_fast.hpp) works on cell-local flat arrays and falls back to kReference only for cells
@@ -80,8 +90,10 @@ std::vector<CellVerdict> classify_cells(const SurfaceMesh& mesh, const LatticeCu
                                         const openvdb::FloatGrid& theta, ClassifyPath path = ClassifyPath::kFast);
 
 //! Classify every indexed cell in parallel (per-cell results, deterministic). Returns the sorted keys of
-//! the complex cells, including every cell of the boxes of the cut's bad faces.
+//! the complex cells, including every cell of the boxes of the cut's bad faces; `by_verdict`, when given,
+//! receives the number of indexed cells of each verdict (the bad faces' boxes not included).
 std::vector<std::uint64_t> complex_cells(const SurfaceMesh& mesh, const LatticeCut& cut, const CellIndex& index,
-                                         const openvdb::FloatGrid& theta, ClassifyPath path = ClassifyPath::kFast);
+                                         const openvdb::FloatGrid& theta, ClassifyPath path = ClassifyPath::kFast,
+                                         VerdictCounts* by_verdict = nullptr);
 
 }  // namespace topotrack::topology

@@ -108,7 +108,8 @@ ConstrainReport constrain_topology(SurfaceMesh& mesh, const openvdb::FloatGrid& 
   report.seconds_cut = since(t0);
   const CellIndex index = index_cells(cut, theta);
   report.seconds_index = since(t0) - report.seconds_cut;
-  std::vector<std::uint64_t> region = complex_cells(mesh, cut, index, theta);
+  std::vector<std::uint64_t> region =
+      complex_cells(mesh, cut, index, theta, topology::ClassifyPath::kFast, &report.cells_by_verdict);
   report.bad_faces = cut.bad_faces.size();
   report.seconds_classify = since(t0);
   if (params.count_components) {

@@ -44,6 +44,7 @@
 
 #include "io/event_list.hpp"
 #include "kernels/mesh/surface_mesh.hpp"
+#include "kernels/topology/classify.hpp"
 
 namespace topotrack {
 
@@ -59,6 +60,9 @@ struct ConstrainParams {
 
 struct ConstrainReport {
   std::size_t complex_cells = 0;     //!< cells replaced (after any growth)
+  //! The examined cells by the verdict of the per-cell test (classify.hpp), before any growth: why M was
+  //! resampled where it was (index: int(topology::CellVerdict); names: topology::verdict_name).
+  topology::VerdictCounts cells_by_verdict{};
   std::size_t faces_removed = 0;     //!< triangles of M not kept intact
   std::size_t faces_added = 0;       //!< triangles of the result that are not triangles of M
   std::size_t vertices_removed = 0;  //!< vertices of M removed

@@ -108,15 +108,30 @@ TEST(Tracker, TakesTheTopologyOfTheInput) {
     frames.push_back(spheres_frame({{Vec3(-0.4 - gap, 0, 0), 0.45}, {Vec3(0.4 + gap, 0, 0), 0.45}}));
   }
   Tracker tracker;
-  std::size_t last_components = 0;
+  std::size_t last_components = 0, target_cells = 0, target_reasons = 0;
   for (const auto& f : frames) {
     const std::size_t want = connected_components(f);
     last_components = tracker.add_frame(f).components;
     EXPECT_EQ(last_components, want);
     EXPECT_EQ(tracker.report().euler, euler_characteristic(f));
     EXPECT_NO_THROW(tracker.mesh().validate(true));
+    // The report says why cells were complex: verdict counts, at most the cells replaced.
+    const FrameReport& r = tracker.report();
+    std::size_t self = 0, target = 0;
+    for (int k = 1; k < topology::kVerdictKinds; ++k) {
+      self += r.complex_reasons_self[k];
+      target += r.complex_reasons_target[k];
+    }
+    EXPECT_LE(self, r.complex_cells_self);
+    EXPECT_LE(target, r.complex_cells_target);
+    EXPECT_EQ(self == 0, r.complex_cells_self == 0);
+    EXPECT_EQ(target == 0, r.complex_cells_target == 0);
+    target_cells += r.complex_cells_target;
+    target_reasons += target;
   }
   EXPECT_EQ(last_components, 2u);
+  EXPECT_GT(target_reasons, 0u) << "the pinch-off is resampled against φ_S";
+  EXPECT_GE(target_cells, target_reasons);
 }
 
 TEST(Tracker, SameOutputWithOneOrTwoThreads) {

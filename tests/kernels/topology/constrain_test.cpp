@@ -128,6 +128,30 @@ TEST(ConstrainTopology, CleanMeshAgainstItsOwnDistanceIsComplexOnlyAtMultipleCro
   EXPECT_LT(complex, cells / 250);  // 180 of 101540 now, 564 before
 }
 
+// The report says why cells were complex: verdict counts over the examined cells, consistent with the
+// cells replaced, with a name for each (`topotrack constrain --json` prints them as complex_by_reason).
+TEST(ConstrainTopology, ReportsWhyCellsAreComplex) {
+  using namespace topology;
+  const double h = 0.04;
+  SurfaceMesh m = mc_mesh(*unite(sphere(0.5, {-0.42, 0, 0}, h), sphere(0.5, {0.42, 0, 0}, h)));
+  const ConstrainReport r = constrain_topology(m, *unite(sphere(0.5, {-0.56, 0.01, 0}, h), sphere(0.5, {0.56, 0.01, 0}, h)));
+  std::size_t complex = 0;
+  for (int k = 1; k < kVerdictKinds; ++k) complex += r.cells_by_verdict[k];
+  EXPECT_GT(complex, 0u);
+  EXPECT_LE(complex, r.complex_cells);  // growth and slivers only add cells
+  // Θ's balls are 0.14 (3.5 voxels) from M's: cells with M and no sign change of Θ, and the reverse.
+  EXPECT_GT(r.cells_by_verdict[int(CellVerdict::kUnmatchedLoop)], 0u);
+  EXPECT_GT(r.cells_by_verdict[int(CellVerdict::kMissed)], 0u);
+  EXPECT_STREQ(verdict_name(CellVerdict::kSimple), "simple");
+  EXPECT_STREQ(verdict_name(CellVerdict::kEdgeCrossedTwice), "edge_crossed_twice");
+  // A mesh that already matches: every examined cell simple, nothing replaced.
+  SurfaceMesh ball = mc_mesh(*sphere(0.5, {0.01, 0.02, 0.03}, h));
+  const ConstrainReport same = constrain_topology(ball, *sphere(0.5, {0.01, 0.02, 0.03}, h));
+  EXPECT_EQ(same.complex_cells, 0u);
+  for (int k = 1; k < kVerdictKinds; ++k) EXPECT_EQ(same.cells_by_verdict[k], 0u) << verdict_name(CellVerdict(k));
+  EXPECT_GT(same.cells_by_verdict[0], 0u);
+}
+
 TEST(ConstrainTopology, SphereSplitsIntoTwo) {
   const double h = 0.04;
   // M: two overlapping balls, one component; target: the same balls pulled apart.
