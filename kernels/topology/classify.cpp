@@ -6,7 +6,6 @@
 #include <limits>
 #include <memory>
 #include <numeric>
-#include <span>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
@@ -104,16 +103,6 @@ bool same_cycle(const std::vector<int>& loop, std::span<const std::uint8_t> poly
   return true;
 }
 
-// Whether a loop (cube edges in the order M's boundary crosses them) crosses a cube edge twice.
-bool edge_twice(std::span<const int> loop) {
-  unsigned seen = 0;
-  for (int e : loop) {
-    if ((seen >> e) & 1u) return true;
-    seen |= 1u << e;
-  }
-  return false;
-}
-
 CellVerdict classify_cell(const SurfaceMesh& mesh, const LatticeCut& cut, const CellIndex& index, std::size_t ci,
                           std::uint8_t mask, Scratch& s) {
   using enum CellVerdict;
@@ -190,7 +179,7 @@ CellVerdict classify_cell(const SurfaceMesh& mesh, const LatticeCut& cut, const 
     int match = -1;
     for (int p = 0; p < polys.count && match < 0; ++p)
       if (!poly_used[p] && same_cycle(s.loop, polys.polygon(p))) match = p;
-    if (match < 0) return edge_twice(s.loop) ? kEdgeCrossedTwice : kUnmatchedLoop;
+    if (match < 0) return crosses_an_edge_twice(std::span<const int>(s.loop)) ? kEdgeCrossedTwice : kUnmatchedLoop;
     poly_used[match] = 1;
     s.loop_root.push_back(find(s.parent, s.boundary[start].from));
   }
@@ -504,8 +493,8 @@ std::vector<CellVerdict> classify_cells(const SurfaceMesh& mesh, const LatticeCu
 
 const char* verdict_name(CellVerdict v) {
   static constexpr const char* kNames[kVerdictKinds] = {
-      "simple",     "missed",       "duplicate_edge", "pinch",    "mesh_boundary",     "broken_loop",
-      "loop_in_face", "unmatched_loop", "not_disk",    "curves_cross", "edge_crossed_twice"};
+      "simple",       "missed",         "duplicate_edge", "pinch",        "mesh_boundary",     "broken_loop",
+      "loop_in_face", "unmatched_loop", "not_disk",       "curves_cross", "edge_crossed_twice"};
   const int i = int(v);
   return i >= 0 && i < kVerdictKinds ? kNames[i] : "unknown";
 }

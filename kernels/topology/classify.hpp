@@ -13,6 +13,7 @@
 //! only resampling.
 #include <array>
 #include <cstdint>
+#include <span>
 #include <openvdb/openvdb.h>
 #include <vector>
 
@@ -79,6 +80,18 @@ inline constexpr int kVerdictKinds = 11;
 const char* verdict_name(CellVerdict v);
 //! Cells counted by verdict (index: int(CellVerdict)).
 using VerdictCounts = std::array<std::uint32_t, kVerdictKinds>;
+
+//! Whether a boundary loop, given as the cube edges (0..11) it crosses in order, crosses one of them twice:
+//! tells kEdgeCrossedTwice from kUnmatchedLoop (both per-cell tests use it).
+template <class Edge>
+bool crosses_an_edge_twice(std::span<const Edge> loop) {
+  unsigned seen = 0;
+  for (const Edge e : loop) {
+    if ((seen >> e) & 1u) return true;
+    seen |= 1u << e;
+  }
+  return false;
+}
 
 //! Which implementation of the per-cell test runs. Both give the same verdict for every cell (tested):
 //! kFast (classify_fast.hpp) works on cell-local flat arrays and falls back to kReference only for cells

@@ -203,14 +203,9 @@ std::optional<CellVerdict> classify_cell_fast(const SurfaceMesh& mesh, const Lat
     int match = -1;
     for (int p = 0; p < polys.count && match < 0; ++p)
       if (!poly_used[p] && same_cycle(s.loop, len, polys.polygon(p))) match = p;
-    if (match < 0) {
-      unsigned seen = 0;
-      for (int i = 0; i < len; ++i) {
-        if ((seen >> s.loop[i]) & 1u) return kEdgeCrossedTwice;
-        seen |= 1u << s.loop[i];
-      }
-      return kUnmatchedLoop;
-    }
+    if (match < 0)
+      return crosses_an_edge_twice(std::span<const std::uint8_t>(s.loop, std::size_t(len))) ? kEdgeCrossedTwice
+                                                                                           : kUnmatchedLoop;
     poly_used[match] = 1;
     s.loop_root[loops++] = find(s.parent, std::uint8_t(start));
   }
