@@ -33,7 +33,7 @@ TEST(Profile, EveryBundledProfileLoads) {
     EXPECT_NE(std::find(names.begin(), names.end(), n), names.end()) << n;
   for (const auto& n : names) EXPECT_NO_THROW(load_profile(n)) << n;
   EXPECT_EQ(load_profile("preview").coarse_params.graph_density, 0.25);
-  EXPECT_EQ(load_profile("capture").coarse_params.alpha_reg_start, 10000);
+  EXPECT_EQ(load_profile("capture").coarse_params.alpha_reg_start, 1000);  // the paper's (10000 drifted more)
   // A denser graph for squashing bodies (tests/kernels/registration/coarse_drift_test.cpp).
   EXPECT_EQ(load_profile("capture").coarse_params.node_spacing_factor, 2);
   EXPECT_EQ(load_profile("default").coarse_params.node_spacing_factor, 4);  // the paper's
