@@ -12,7 +12,7 @@
 #include <utility>
 
 #include "kernels/improve/improve_geometry.hpp"
-#include "kernels/raycast/target_surface.hpp"
+#include "kernels/mesh/mesh_queries.hpp"
 
 namespace topotrack {
 namespace {

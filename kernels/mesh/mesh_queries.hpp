@@ -79,4 +79,7 @@ double dihedral_angle_deg(const SurfaceMesh& mesh, Edge e);
 //! The three interior angles of a face in degrees.
 std::array<double, 3> face_angles_deg(const SurfaceMesh& mesh, Face f);
 
+//! The closest point to p on triangle (a, b, c) (Ericson, Real-Time Collision Detection §5.1.5).
+Vec3 closest_point_on_triangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c);
+
 }  // namespace topotrack
