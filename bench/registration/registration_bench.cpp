@@ -76,6 +76,37 @@ void alignment_counters(benchmark::State& state, const CoarseReport& c, const Fi
   state.counters["fine_s"] = fr.seconds_total;
 }
 
+// Comparisons without rebuilding: TOPOTRACK_BENCH_COARSE="name=value,..." overrides CoarseParams
+// fields of BM_AlignCoarseFine and BM_TrackerStep (retract_rotations, check_fit_first, fit_tolerance, step_tolerance,
+// convergence_tolerance, max_iterations_per_level, max_pcg_iterations, coarse_pass_density,
+// coarse_pass_alpha_reg_min, coarse_pass_misfit, max_iterations_per_level_after_pass).
+void override_params(CoarseParams& p) {
+  const char* env = std::getenv("TOPOTRACK_BENCH_COARSE");
+  if (!env) return;
+  const std::string all(env);
+  std::size_t at = 0;
+  while (at < all.size()) {
+    const std::size_t end = std::min(all.find(',', at), all.size()), eq = all.find('=', at);
+    if (eq < end) {
+      const std::string name = all.substr(at, eq - at);
+      const double v = std::atof(all.substr(eq + 1, end - eq - 1).c_str());
+      if (name == "retract_rotations") p.retract_rotations = v != 0;
+      else if (name == "check_fit_first") p.check_fit_first = v != 0;
+      else if (name == "fit_tolerance") p.fit_tolerance = v;
+      else if (name == "step_tolerance") p.step_tolerance = v;
+      else if (name == "convergence_tolerance") p.convergence_tolerance = v;
+      else if (name == "max_iterations_per_level") p.max_iterations_per_level = int(v);
+      else if (name == "max_pcg_iterations") p.max_pcg_iterations = int(v);
+      else if (name == "coarse_pass_density") p.coarse_pass_density = v;
+      else if (name == "coarse_pass_alpha_reg_min") p.coarse_pass_alpha_reg_min = v;
+      else if (name == "coarse_pass_misfit") p.coarse_pass_misfit = v;
+      else if (name == "max_iterations_per_level_after_pass") p.max_iterations_per_level_after_pass = int(v);
+      else std::fprintf(stderr, "TOPOTRACK_BENCH_COARSE: unknown field %s\n", name.c_str());
+    }
+    at = end + 1;
+  }
+}
+
 void BM_AlignCoarseFine(benchmark::State& state) {
   const Fixture& f = fixture(int(state.range(0)), int(state.range(2)));
   CoarseParams params;
@@ -86,6 +117,7 @@ void BM_AlignCoarseFine(benchmark::State& state) {
     params.coarse_pass_misfit = 0;
     params.backward_weight = 0;
   }
+  override_params(params);
   FineParams fine;
   fine.normal_displacement = state.range(5) != 0;
   CoarseReport c;
@@ -167,36 +199,6 @@ double truth_error(const SurfaceMesh& mesh, const BlobsStep& f) {
       ++n;
     }
   return n ? 100 * sum / (double(n) * f.diagonal) : 0;
-}
-
-// Comparisons without rebuilding: TOPOTRACK_BENCH_COARSE="name=value,..." overrides CoarseParams
-// fields of BM_TrackerStep (retract_rotations, check_fit_first, fit_tolerance, step_tolerance,
-// convergence_tolerance, max_iterations_per_level, max_pcg_iterations, coarse_pass_density,
-// coarse_pass_alpha_reg_min, coarse_pass_misfit).
-void override_params(CoarseParams& p) {
-  const char* env = std::getenv("TOPOTRACK_BENCH_COARSE");
-  if (!env) return;
-  const std::string all(env);
-  std::size_t at = 0;
-  while (at < all.size()) {
-    const std::size_t end = std::min(all.find(',', at), all.size()), eq = all.find('=', at);
-    if (eq < end) {
-      const std::string name = all.substr(at, eq - at);
-      const double v = std::atof(all.substr(eq + 1, end - eq - 1).c_str());
-      if (name == "retract_rotations") p.retract_rotations = v != 0;
-      else if (name == "check_fit_first") p.check_fit_first = v != 0;
-      else if (name == "fit_tolerance") p.fit_tolerance = v;
-      else if (name == "step_tolerance") p.step_tolerance = v;
-      else if (name == "convergence_tolerance") p.convergence_tolerance = v;
-      else if (name == "max_iterations_per_level") p.max_iterations_per_level = int(v);
-      else if (name == "max_pcg_iterations") p.max_pcg_iterations = int(v);
-      else if (name == "coarse_pass_density") p.coarse_pass_density = v;
-      else if (name == "coarse_pass_alpha_reg_min") p.coarse_pass_alpha_reg_min = v;
-      else if (name == "coarse_pass_misfit") p.coarse_pass_misfit = v;
-      else std::fprintf(stderr, "TOPOTRACK_BENCH_COARSE: unknown field %s\n", name.c_str());
-    }
-    at = end + 1;
-  }
 }
 
 void BM_TrackerStep(benchmark::State& state) {

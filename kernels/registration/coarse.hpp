@@ -143,6 +143,12 @@ struct CoarseParams {
   double coarse_pass_density = 0.25;
   double coarse_pass_alpha_reg_min = 0.1;
   //! Cap on rounds per alpha_reg level of the full graph after the low-density pass ran (see above).
+  //! 8 instead of 3 (measured 2026-11-23): frame k -> k+15 from k = 1, 3, 5, 7, 9
+  //! (tests/kernels/registration/real_data_test.cpp), summed error pcow 15.75% -> 14.77%, elephant 18.84% ->
+  //! 18.55%, samba 1.616% -> 1.606%, but bench/registration gap 15 at 47k 1.42 -> 2.20 s, at 98k 3.19 -> 4.58 s
+  //! (issue 4's 2 s / 4 s); resurfaced pcow tracked 40 frames: drift 2.61% -> 2.19% (default profile, coarse
+  //! median 1.20 -> 1.36 s/frame), 2.013% -> 1.901% (profiles/capture.json, which sets 8). Where the full
+  //! graph finds the nodes fitted (blobs) or the pass does not run (samba) nothing changes.
   int max_iterations_per_level_after_pass = 3;
   //! Large motion (our addition, the target -> source half of a symmetric fit): when the misfit (see
   //! prealign_misfit) exceeds `backward_misfit`, each round also matches the target to the nodes

@@ -36,6 +36,8 @@ TEST(Profile, EveryBundledProfileLoads) {
   EXPECT_EQ(load_profile("capture").coarse_params.alpha_reg_start, 1000);  // the paper's (10000 drifted more)
   // A denser graph for squashing bodies (tests/kernels/registration/coarse_drift_test.cpp).
   EXPECT_EQ(load_profile("capture").coarse_params.node_spacing_factor, 2);
+  EXPECT_EQ(load_profile("capture").coarse_params.max_iterations_per_level_after_pass, 8);  // 3 drifted more
+  EXPECT_EQ(load_profile("default").coarse_params.max_iterations_per_level_after_pass, 3);
   EXPECT_EQ(load_profile("default").coarse_params.node_spacing_factor, 4);  // the paper's
 }
 
