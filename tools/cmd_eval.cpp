@@ -222,11 +222,13 @@ void run_eval(const EvalOptions& opt) {
       const std::vector<float> none(3, NAN);
       gather_values(material, ids, none, mat);
       std::vector<Vec3> tracked_p, material_p;
+      std::vector<std::size_t> row;  // per point with a material position: its index in ids
       const auto pos = live_positions(tracked);
       for (std::size_t i = 0; i < ids.size(); ++i) {
         if (!std::isfinite(mat[3 * i])) continue;
         tracked_p.push_back(pos[i]);
         material_p.push_back(Vec3(mat[3 * i], mat[3 * i + 1], mat[3 * i + 2]));
+        row.push_back(i);
       }
       std::vector<Vec3> expected;
       bool have = false;
@@ -246,13 +248,8 @@ void run_eval(const EvalOptions& opt) {
         }
       }
       if (have && !opt.per_vertex.empty()) {
-        std::vector<double> vd(ids.size(), NAN);
-        for (std::size_t i = 0, j = 0; i < ids.size(); ++i)
-          if (std::isfinite(mat[3 * i])) {
-            vd[i] = (tracked_p[j] - expected[j]).norm() / diag;
-            ++j;
-          }
-        per_vertex_drift = std::move(vd);
+        per_vertex_drift.assign(ids.size(), NAN);
+        for (std::size_t j = 0; j < row.size(); ++j) per_vertex_drift[row[j]] = (tracked_p[j] - expected[j]).norm() / diag;
       }
       if (have) {
         const DriftStats ds = drift_stats(tracked_p, expected);
@@ -261,13 +258,10 @@ void run_eval(const EvalOptions& opt) {
         // The same over the vertices that date from the first frame (same id): the alignment's drift alone,
         // without what the §4.4 rules interpolate onto vertices created by resampling.
         std::vector<Vec3> kept_p, kept_expected;
-        for (std::size_t i = 0, j = 0; i < ids.size(); ++i)
-          if (std::isfinite(mat[3 * i])) {
-            if (born.at(ids[i]) == first_number) {
-              kept_p.push_back(tracked_p[j]);
-              kept_expected.push_back(expected[j]);
-            }
-            ++j;
+        for (std::size_t j = 0; j < row.size(); ++j)
+          if (born.at(ids[row[j]]) == first_number) {
+            kept_p.push_back(tracked_p[j]);
+            kept_expected.push_back(expected[j]);
           }
         const DriftStats dk = drift_stats(kept_p, kept_expected);
         fj["drift"]["first_frame_vertices"] = {{"points", dk.points}, {"mean", dk.mean / diag},
