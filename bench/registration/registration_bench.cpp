@@ -101,6 +101,8 @@ void override_params(CoarseParams& p) {
       else if (name == "coarse_pass_alpha_reg_min") p.coarse_pass_alpha_reg_min = v;
       else if (name == "coarse_pass_misfit") p.coarse_pass_misfit = v;
       else if (name == "max_iterations_per_level_after_pass") p.max_iterations_per_level_after_pass = int(v);
+      else if (name == "node_spacing_factor") p.node_spacing_factor = v;
+      else if (name == "alpha_reg_min") p.alpha_reg_min = v;
       else std::fprintf(stderr, "TOPOTRACK_BENCH_COARSE: unknown field %s\n", name.c_str());
     }
     at = end + 1;

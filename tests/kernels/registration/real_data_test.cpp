@@ -22,7 +22,8 @@ struct Figures {
 
 // Environment knobs for comparisons: TOPOTRACK_TEST_CHOLESKY=eigen, TOPOTRACK_TEST_DIRECT=1,
 // TOPOTRACK_TEST_RETRACT=0|1 (retract_rotations), TOPOTRACK_TEST_CHECK_FIT=0|1 (check_fit_first), and
-// TOPOTRACK_TEST_<NAME>=value for the CoarseParams below (MAX_PCG: max_pcg_iterations), TOPOTRACK_TEST_HISTORY=1
+// TOPOTRACK_TEST_<NAME>=value for the CoarseParams below (MAX_PCG: max_pcg_iterations, NODE_SPACING:
+// node_spacing_factor), TOPOTRACK_TEST_HISTORY=1
 // (per-round figures), TOPOTRACK_TEST_RIGID_TRUTH=1 (the error of the best rigid motion: pcow 9.5%, elephant 6.0%).
 void env_double(const char* name, double& value) {
   if (const char* e = std::getenv(name)) value = std::atof(e);
@@ -72,6 +73,7 @@ Figures run_pair(const std::string& name, int frame, int gap) {
   env_double("TOPOTRACK_TEST_MAX_CLOSEST_RATIO", params.max_closest_ratio);
   env_double("TOPOTRACK_TEST_MAX_NORMAL_ANGLE", params.max_normal_angle_deg);
   env_int("TOPOTRACK_TEST_MAX_ITERATIONS", params.max_iterations);
+  env_double("TOPOTRACK_TEST_NODE_SPACING", params.node_spacing_factor);
   env_int("TOPOTRACK_TEST_MAX_PER_LEVEL", params.max_iterations_per_level);
   env_int("TOPOTRACK_TEST_MAX_PCG", params.max_pcg_iterations);
   env_double("TOPOTRACK_TEST_PREALIGN_MISFIT", params.prealign_misfit);
