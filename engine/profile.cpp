@@ -42,6 +42,7 @@ std::vector<Binding> bindings(TrackerParams& p) {
       {"improve.max_surface_deviation", &p.improve.max_surface_deviation, 0, inf},
       {"improve.max_operation_deviation", &p.improve.max_operation_deviation, 0, inf},
       {"improve.max_flip_bend_deg", &p.improve.max_flip_bend_deg, 0, 180},
+      {"improve.crease_collapse_fraction", &p.improve.crease_collapse_fraction, 0, 1},
       {"coarse.node_spacing_factor", &p.coarse_params.node_spacing_factor, 1e-3, 1e3},
       {"coarse.k", &p.coarse_params.k, 1, 16},
       {"coarse.alpha_point", &p.coarse_params.alpha_point, 0, inf},

@@ -97,6 +97,7 @@ public:
     q_floor_ = std::sin(kShortCollapseAngleFloor * p_.min_angle_deg * kDegToRad);
     lmax_short2_ = lmax2_ * kShortCollapseStretch * kShortCollapseStretch;
     cos_fold_ = std::cos((180.0 - p_.min_dihedral_deg) * kDegToRad);
+    lcrease2_ = p_.crease_collapse_fraction * p_.crease_collapse_fraction * lmin2_;
     cos_flip_bend_ = std::cos(p_.max_flip_bend_deg * kDegToRad);
     rep_.min_edge_length = lmin_;
     rep_.max_edge_length = lmax_;
@@ -341,6 +342,19 @@ private:
     return {worst, folds};
   }
 
+  //! Whether a collapse of the edge (pa, pb) may sharpen a crease or add a fold (ImproveParams::
+  //! crease_collapse_fraction): the edge is that much shorter than L_min and the one-ring around it (ring_, as
+  //! try_collapse gathered it) spans at least L_min, so that a speck smaller than L_min is not folded up.
+  bool crease_collapse_ok(const Vec3& pa, const Vec3& pb) const {
+    if (!((pa - pb).squaredNorm() < lcrease2_)) return false;
+    Vec3 lo = pa, hi = pa;
+    for (const RingFace& r : ring_) {
+      lo = lo.cwiseMin(pos(r.w1));
+      hi = hi.cwiseMax(pos(r.w1));
+    }
+    return (hi - lo).squaredNorm() >= lmin2_;
+  }
+
   std::size_t valence(Vertex v) const {
     std::size_t n = 0;
     const Halfedge g0 = m_.halfedge(v);
@@ -488,7 +502,7 @@ private:
         new_worst = std::min(new_worst, normal_cos(r.n_new, r.n_out));
       }
       const auto [old_worst, old_folds] = creases_before_collapse(a, b);
-      if (new_worst < old_worst || new_folds > old_folds) return false;
+      if ((new_worst < old_worst || new_folds > old_folds) && !crease_collapse_ok(pa, pb)) return false;
     }
     // Short collapses are bounded too: on a ridge the midpoint of an edge across it cuts the ridge off, and
     // a few such cuts in a row moved the surface of resurfaced frames by 0.34 L (elephant frame 3); the
@@ -1004,6 +1018,7 @@ private:
   EventList* events_;
   ImproveReport& rep_;
   double lmax_short2_ = 0;
+  double lcrease2_ = 0;
   double lmin_ = 0, lmax_ = 0, lmin2_ = 0, lmax2_ = 0, max_dev_ = 0, op_dev_ = 0, q_very_bad_ = 0;
   double q_min_ = 0, q_bad_ = 0, q_bad2_ = 0, q_floor_ = 0, cos_fold_ = 0, cos_flip_bend_ = 1;
   std::vector<std::uint8_t> fbad_;  // survey: face with a small angle
@@ -1035,6 +1050,9 @@ void check_params(const ImproveParams& params) {
     TT_THROW(InvalidInput, "improve_mesh: max_surface_deviation must be >= 0, got " << params.max_surface_deviation);
   if (!(params.max_flip_bend_deg >= 0 && params.max_flip_bend_deg <= 180))
     TT_THROW(InvalidInput, "improve_mesh: max_flip_bend_deg must be in [0, 180], got " << params.max_flip_bend_deg);
+  if (!(params.crease_collapse_fraction >= 0 && params.crease_collapse_fraction <= 1))
+    TT_THROW(InvalidInput,
+             "improve_mesh: crease_collapse_fraction must be in [0, 1], got " << params.crease_collapse_fraction);
   if (!std::isfinite(params.target_edge_length))
     TT_THROW(InvalidInput, "improve_mesh: target_edge_length must be finite");
 }
@@ -1072,6 +1090,8 @@ ImproveReport improve_mesh(SurfaceMesh& mesh, const ImproveParams& params, Event
   check_params(params);
   ImproveReport report;
   if (mesh.n_faces() > 0) {
+    if (const std::size_t open = boundary_edge_count(mesh); open > 0)
+      TT_THROW(InvalidInput, "improve_mesh: the surface is open (" << open << " boundary edges); a closed one is required");
     const double L = params.target_edge_length > 0 ? params.target_edge_length : mean_edge_length_parallel(mesh);
     if (L > 0) {
       Improver imp(mesh, params, events, report);

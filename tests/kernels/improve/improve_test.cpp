@@ -4,9 +4,11 @@
 #include <tbb/global_control.h>
 
 #include <cstdio>
+#include <filesystem>
 #include <random>
 #include <string>
 
+#include "io/mesh_reader.hpp"
 #include "kernels/mesh/mesh_convert.hpp"
 #include "kernels/mesh/mesh_queries.hpp"
 #include "kernels/mesh/soup_stats.hpp"
@@ -265,6 +267,30 @@ TEST(Improve, OneAndTwoThreadsGiveBitIdenticalOutput) {
   EXPECT_TRUE(e1 == e2);
 }
 
+// A needle whose short edge lies in a crease, where ConstrainTopology's patch meets the kept mesh (the
+// neighbourhood of one in resurfaced pcow frame 20, tracked with the default profile): no collapse, flip or move
+// may remove it without sharpening the crease into a fold, so it stayed; collapsing the short edge anyway and
+// letting the fold pass round the crease off removes it (ImproveParams::crease_collapse_fraction).
+TEST(Improve, CollapsesNeedleInCrease) {
+  const SurfaceMesh patch = to_surface_mesh(
+      read_mesh(std::filesystem::path(TOPOTRACK_SOURCE_DIR) / "tests/data/improve/crease_needle.obj"));
+  ImproveParams p;
+  p.target_edge_length = 0.012825873421360611;  // the tracked sequence's L
+  p.measure_quality = true;
+  const auto improved = [&](double fraction) {
+    SurfaceMesh m = patch.clone();
+    p.crease_collapse_fraction = fraction;
+    return improve_mesh(m, p).quality;
+  };
+  const QualityStats before = improved(0);
+  EXPECT_GT(before.below_2deg, 0u);
+  const QualityStats after = improved(ImproveParams{}.crease_collapse_fraction);
+  EXPECT_EQ(after.below_2deg, 0u);
+  EXPECT_GE(after.min_angle_deg, 2.0);
+  // The fan that closes the cut-out patch meets it at a few sharp creases; none is added.
+  EXPECT_LE(after.dihedral_below_45deg, before.dihedral_below_45deg);
+}
+
 TEST(Improve, AlreadyGoodMeshIsLeftUnchanged) {
   // An improved mesh improved again with the same bounds, and a regular icosphere with default bounds.
   SurfaceMesh good = test::mt_torus(30).mesh();
@@ -329,6 +355,13 @@ TEST(Improve, RejectsBadParameters) {
   bad([](ImproveParams& p) { p.max_surface_deviation = -0.1; });
   bad([](ImproveParams& p) { p.max_operation_deviation = std::nan(""); });
   bad([](ImproveParams& p) { p.max_flip_bend_deg = 181; });
+  bad([](ImproveParams& p) { p.crease_collapse_fraction = -0.1; });
+  bad([](ImproveParams& p) { p.crease_collapse_fraction = 1.5; });
+  // An open surface (the precondition is a closed one): a clear error, not a crash.
+  const std::vector<Vec3> corners = {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0), Vec3(0, 0, 1)};
+  const std::vector<std::array<Index, 3>> three_faces = {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}};
+  SurfaceMesh open = SurfaceMesh::from_triangles(corners, three_faces);
+  EXPECT_THROW(improve_mesh(open, {}), InvalidInput);
   bad([](ImproveParams& p) { p.target_edge_length = std::numeric_limits<double>::infinity(); });
 }
 
