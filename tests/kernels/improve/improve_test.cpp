@@ -181,6 +181,41 @@ TEST(Improve, RemovesFolds) {
   EXPECT_EQ(genus(out), 0);
 }
 
+test::Soup low_tetrahedron(double height) {
+  // An equilateral base of unit edges in z = 0 and an apex `height` above its centroid, faces outwards.
+  test::Soup s;
+  s.positions = {{0, 0, 0}, {1, 0, 0}, {0.5, std::sqrt(0.75), 0}, {0.5, std::sqrt(0.75) / 3, height}};
+  s.triangles = {{0, 2, 1}, {0, 1, 3}, {1, 2, 3}, {2, 0, 3}};
+  return s;
+}
+
+TEST(Improve, InflatesFoldsThatNoCollapseMayRemove) {
+  // A speck thinner than L_min, as the tracker's topology steps leave of the input's specks: a tetrahedron
+  // whose three base edges have dihedral angles of 30° (resurfaced pcow, frame 15: 10.6° and 14.3°). A
+  // collapse would pinch it (link condition) and a move towards a one-ring sharpens another edge; the
+  // apex moved outwards removes all three folds.
+  for (const double dihedral_deg : {30.0, 15.0}) {
+    SCOPED_TRACE(dihedral_deg);
+    const double inradius = std::sqrt(0.75) / 3;
+    const SurfaceMesh in = low_tetrahedron(inradius * std::tan(dihedral_deg * M_PI / 180)).mesh();
+    ASSERT_EQ(quality_stats(in).dihedral_below_45deg, 3u);
+    SurfaceMesh out = in.clone();
+    ImproveParams params;
+    params.target_edge_length = mean_edge_length(in);
+    params.validate_each_step = true;
+    EventList events;
+    improve_mesh(out, params, &events);
+    EXPECT_EQ(quality_stats(out).dihedral_below_45deg, 0u);
+    EXPECT_EQ(out.n_vertices(), 4u);
+    EXPECT_TRUE(events.empty());  // moves only
+    // The base stays; the apex moves along the normal, by less than max_surface_deviation.
+    for (Index i = 0; i < 3; ++i) EXPECT_EQ(out.position(Vertex(i)), in.position(Vertex(i))) << i;
+    const Vec3 d = out.position(Vertex(3)) - in.position(Vertex(3));
+    EXPECT_GT(d.z(), 0);
+    EXPECT_LE(d.norm(), params.max_surface_deviation * params.target_edge_length);
+  }
+}
+
 TEST(Improve, EventsReplayForwardReproducesPositions) {
   // Every vertex improve_mesh creates sits at the midpoint of the two it comes from (split: the edge's
   // end points; collapse: the collapsed pair), exactly what the §4.4 rules say: positions are linear data,

@@ -7,6 +7,8 @@
 #include <cstdio>
 #include <cstdlib>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "kernels/registration/coarse.hpp"
 #include "kernels/registration/fine.hpp"
@@ -35,9 +37,9 @@ void env_int(const char* name, int& value) {
 int last_rounds = 0;       // rounds of the last run_pair
 CoarseReport last_coarse;  // its coarse report
 
-Figures run_pair(const std::string& name, int frame, int gap) {
+Figures run_pair(const std::string& name, int frame, int gap, double edge_factor = 0.8) {
   env_int("TOPOTRACK_TEST_FRAME", frame);  // another start frame, for comparisons (the assertions are for frame 1)
-  test::AlignmentPair pair = test::make_pair(name, frame, gap);
+  test::AlignmentPair pair = test::make_pair(name, frame, gap, edge_factor);
   const TargetSurface target = TargetSurface::from_mesh(pair.target_mesh);
   Figures f;
   f.unaligned = test::alignment_error(pair.source, pair.truth, target, pair.diagonal);
@@ -140,6 +142,36 @@ Figures run_pair(const std::string& name, int frame, int gap) {
   return f;
 }
 
+// Large motion, frame k onto k + 15, once per re-sampling of the target (improve_mesh at 0.78-0.82 of its
+// mean edge length): which part a swinging leg lands on (pcow, elephant) turns on details of the target's
+// triangles, so one re-sampling is one draw: measured when this was written (2026-11-24), the elephant
+// gave 3.14 / 3.80 / 4.29 / 3.75 / 3.23% and pcow 3.76 / 3.08 / 3.60 / 3.87 / 3.11%, samba 0.151-0.153%.
+// The figures of the run with the median error are returned (last_coarse: its report);
+// TOPOTRACK_TEST_EDGE_FACTOR=x runs that one re-sampling only (the figures in the comments below that
+// name no median are of one re-sampling at 0.8, before the median: 3.25% pcow, 3.41% elephant).
+Figures run_resampled(const std::string& name, int frame, int gap) {
+  std::vector<double> factors = {0.78, 0.79, 0.8, 0.81, 0.82};
+  if (const char* e = std::getenv("TOPOTRACK_TEST_EDGE_FACTOR")) factors = {std::atof(e)};
+  std::vector<std::pair<Figures, CoarseReport>> runs;
+  for (const double factor : factors) {
+    const Figures f = run_pair(name, frame, gap, factor);
+    runs.emplace_back(f, last_coarse);
+  }
+  std::vector<std::size_t> order(runs.size());
+  for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+    return runs[a].first.aligned.mean_truth < runs[b].first.aligned.mean_truth;
+  });
+  std::printf("%s %d->%d, target re-sampled at", name.c_str(), frame, frame + gap);
+  for (const double factor : factors) std::printf(" %.2f", factor);
+  std::printf(" of its edge length: truth error %% of diag");
+  for (const auto& [f, c] : runs) std::printf(" %.4f", 100 * f.aligned.mean_truth);
+  const std::size_t median = order[order.size() / 2];
+  std::printf("; median %.4f\n", 100 * runs[median].first.aligned.mean_truth);
+  last_coarse = runs[median].second;
+  return runs[median].first;
+}
+
 // The targets are 0.35% of the diagonal and a fifth of the unaligned error for the ground-truth
 // error, 0.1% for the distance to the target. Measured (see the printed figures) they are met only
 // where the motion stays within the capture range of the correspondences (samba); where it does not
@@ -155,15 +187,16 @@ void expect_improvement(const Figures& f, double max_ratio_to_unaligned) {
 
 TEST(RealData, SambaLargeMotion) {
   TOPOTRACK_REQUIRE_DATA("samba");
-  const Figures f = run_pair("samba", 1, 15);
+  const Figures f = run_resampled("samba", 1, 15);
   expect_improvement(f, 0.35);
-  EXPECT_LE(f.aligned.mean_truth, 0.0025);  // measured 0.152%
+  EXPECT_LE(f.aligned.mean_truth, 0.0025);  // measured 0.152% (median)
   EXPECT_LE(f.aligned.mean_target, 0.001);
 }
 TEST(RealData, PcowLargeMotion) {
   TOPOTRACK_REQUIRE_DATA("pcow");
-  // Measured 3.25% of 26.7% (misfit 5.1% of the diagonal: pre-aligned, then the low-density pass, both
-  // with the backward matches at every node); 9.13% without them (TOPOTRACK_TEST_BACKWARD_WEIGHT=0),
+  // Median 3.60% of 26.7% (one re-sampling at 0.8: 3.25%; misfit 5.1% of the diagonal: pre-aligned,
+  // then the low-density pass, both with the backward matches at every node); 9.13% without them
+  // (TOPOTRACK_TEST_BACKWARD_WEIGHT=0),
   // 4.32% with them at the pruned nodes only (TOPOTRACK_TEST_BACKWARD_ALL_MISFIT=1),
   // 9.29% also without the rotation retraction (TOPOTRACK_TEST_RETRACT=0); 15.3% with the paper's
   // scheme alone without the retraction (TOPOTRACK_TEST_PREALIGN_MISFIT=0 TOPOTRACK_TEST_PASS_MISFIT=0
@@ -171,7 +204,7 @@ TEST(RealData, PcowLargeMotion) {
   // error is after each stage: without the backward matches the pre-alignment leaves 11.3%, the
   // low-density pass 10.2% and the full graph 9.7% with 44% of the vertices still off the target
   // (the head and a hind leg that no normal ray reaches); with them 6.1%, 3.4% and 25% off.
-  const Figures f = run_pair("pcow", 1, 15);
+  const Figures f = run_resampled("pcow", 1, 15);
   expect_improvement(f, 0.2);
   EXPECT_TRUE(last_coarse.prealigned);
   EXPECT_TRUE(last_coarse.backward_all);
@@ -194,14 +227,15 @@ TEST(RealData, SambaConsecutiveFrames) {
 }
 TEST(RealData, ElephantLargeMotion) {
   TOPOTRACK_REQUIRE_DATA("elephant");
-  // Measured 3.41% of 6.25% (misfit 0.57%: the low-density pass and backward matches at the pruned
-  // nodes, no pre-alignment); 4.27% without the backward matches (TOPOTRACK_TEST_BACKWARD_WEIGHT=0;
+  // Median 3.75% of 6.25% (one re-sampling at 0.8: 3.41%; misfit 0.57%: the low-density pass and
+  // backward matches at the pruned nodes, no pre-alignment); 4.27% without the backward matches
+  // (TOPOTRACK_TEST_BACKWARD_WEIGHT=0;
   // 4.13% before the rotation retraction), 4.02% with them at every node
   // (TOPOTRACK_TEST_BACKWARD_ALL_MISFIT=0); 5.09% with the paper's scheme alone.
   // TOPOTRACK_TEST_STAGES=1 (without the backward matches): the median error is 0.56%, the mean is
   // the two legs that swing (feet 10% apart in the ground truth: 9-10% left after alignment, 9% of the
   // vertices landing on another part).
-  const Figures f = run_pair("elephant", 1, 15);
+  const Figures f = run_resampled("elephant", 1, 15);
   expect_improvement(f, 0.65);
   EXPECT_FALSE(last_coarse.prealigned);
   EXPECT_TRUE(last_coarse.backward);
