@@ -754,15 +754,17 @@ private:
 
   //! Moves of v towards `target` (else the centroid of its one-ring; from a sixteenth of the way up to the
   //! whole: across a fold the tangent plane means nothing) that remove a fold, add none, give no triangle a
-  //! new angle below min_angle and, with keep_lengths, shorten no edge below L_min (which a short collapse
-  //! would then remove, moving the surface again); the shortest such move goes into `best` if it moves the
-  //! surface less (star_deviation). Where a crease is barely a fold a small move rounds it off.
-  void unfold_candidates(Vertex v, FoldFix& best, bool keep_lengths, const Vec3* target = nullptr) {
+  //! new angle below min_angle (below asin(q_keep_cap) where that is lower) and, with keep_lengths, shorten
+  //! no edge below L_min (which a short collapse would then remove, moving the surface again); the shortest
+  //! such move goes into `best` if it moves the surface less (star_deviation). Where a crease is barely a
+  //! fold a small move rounds it off.
+  void unfold_candidates(Vertex v, FoldFix& best, bool keep_lengths, const Vec3* target = nullptr,
+                         double q_keep_cap = 1) {
     Vec3 centroid, normal;
     double old_q = 1;
     if (!gather_star(v, centroid, normal, old_q)) return;
     const Vec3 p0 = pos(v), d = (target ? *target : centroid) - p0;
-    const double q_keep = std::min(old_q, q_min_);
+    const double q_keep = std::min({old_q, q_min_, q_keep_cap});
     const auto ok = [&](double t) {
       double new_q = 1;
       int removed = 0;
@@ -918,9 +920,10 @@ private:
   //! the feature or add a fold) and no move towards the inside works: a tube three edges around, a flat
   //! tetrahedron left of a speck. Moves one corner of the fold's faces outwards, along its star's normal
   //! or away from the centroid of its one-ring (unfold_candidates: the shortest move that removes the fold
-  //! under the same checks). `topotrack improve` on every frame of the raw captures in ../shared/data:
-  //! folds left elephant 2449 -> 70, pcow 513 -> 150, samba 3 -> 0; on tracked pcow frames the moves were
-  //! 0.10-0.21 L.
+  //! under the same checks, except that a triangle may be left with an angle down to 2° instead of min_angle: a
+  //! fold breaks the quality bounds, a small angle is tolerated, and the bad-triangle pass works on it next).
+  //! `topotrack improve` on every frame of the raw captures in ../shared/data: folds left elephant
+  //! 2449 -> 64, pcow 513 -> 144, samba 3 -> 0.
   void inflate_fold(Edge e, FoldFix& best) {
     const Halfedge h0 = m_.halfedge(e, 0), h1 = m_.halfedge(e, 1);
     for (const Vertex v : {m_.to_vertex(m_.next(h0)), m_.to_vertex(m_.next(h1)), m_.to_vertex(h0), m_.to_vertex(h1)}) {
@@ -929,8 +932,8 @@ private:
       if (!gather_star(v, centroid, normal, old_q)) continue;
       const Vec3 p0 = pos(v);
       const Vec3 along_normal = p0 + lmin_ * normal.normalized(), away = 2 * p0 - centroid;
-      unfold_candidates(v, best, false, &along_normal);
-      unfold_candidates(v, best, false, &away);
+      unfold_candidates(v, best, false, &along_normal, q_floor_);
+      unfold_candidates(v, best, false, &away, q_floor_);
     }
   }
 
