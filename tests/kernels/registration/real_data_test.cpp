@@ -144,11 +144,11 @@ Figures run_pair(const std::string& name, int frame, int gap, double edge_factor
 
 // Large motion, frame k onto k + 15, once per re-sampling of the target (improve_mesh at 0.78-0.82 of its
 // mean edge length): which part a swinging leg lands on (pcow, elephant) turns on details of the target's
-// triangles, so one re-sampling is one draw: measured when this was written (2026-11-24), the elephant
-// gave 3.14 / 3.80 / 4.29 / 3.75 / 3.23% and pcow 3.76 / 3.08 / 3.60 / 3.87 / 3.11%, samba 0.151-0.153%.
+// triangles, so one re-sampling is one draw: at b4100c4 the elephant gave 3.09 / 2.95 / 3.20 / 3.05 / 3.33%
+// and pcow 4.50 / 3.12 / 3.12 / 3.02 / 3.81%, samba 0.151-0.153% (docs/results.md).
 // The figures of the run with the median error are returned (last_coarse: its report);
 // TOPOTRACK_TEST_EDGE_FACTOR=x runs that one re-sampling only (the figures in the comments below that
-// name no median are of one re-sampling at 0.8, before the median: 3.25% pcow, 3.41% elephant).
+// name no median are of one re-sampling at 0.8 from before these medians).
 Figures run_resampled(const std::string& name, int frame, int gap) {
   std::vector<double> factors = {0.78, 0.79, 0.8, 0.81, 0.82};
   if (const char* e = std::getenv("TOPOTRACK_TEST_EDGE_FACTOR")) factors = {std::atof(e)};
@@ -194,9 +194,9 @@ TEST(RealData, SambaLargeMotion) {
 }
 TEST(RealData, PcowLargeMotion) {
   TOPOTRACK_REQUIRE_DATA("pcow");
-  // Median 3.60% of 26.7% (one re-sampling at 0.8: 3.25%; misfit 5.1% of the diagonal: pre-aligned,
-  // then the low-density pass, both with the backward matches at every node); 9.13% without them
-  // (TOPOTRACK_TEST_BACKWARD_WEIGHT=0),
+  // Median 3.12% of 26.7% (one re-sampling at 0.8 before b4100c4: 3.25%; misfit 5.1% of the diagonal:
+  // pre-aligned, then the low-density pass, both with the backward matches at every node); 9.13% without
+  // them (TOPOTRACK_TEST_BACKWARD_WEIGHT=0),
   // 4.32% with them at the pruned nodes only (TOPOTRACK_TEST_BACKWARD_ALL_MISFIT=1),
   // 9.29% also without the rotation retraction (TOPOTRACK_TEST_RETRACT=0); 15.3% with the paper's
   // scheme alone without the retraction (TOPOTRACK_TEST_PREALIGN_MISFIT=0 TOPOTRACK_TEST_PASS_MISFIT=0
@@ -227,8 +227,8 @@ TEST(RealData, SambaConsecutiveFrames) {
 }
 TEST(RealData, ElephantLargeMotion) {
   TOPOTRACK_REQUIRE_DATA("elephant");
-  // Median 3.75% of 6.25% (one re-sampling at 0.8: 3.41%; misfit 0.57%: the low-density pass and
-  // backward matches at the pruned nodes, no pre-alignment); 4.27% without the backward matches
+  // Median 3.09% of 6.25% (one re-sampling at 0.8 before b4100c4: 3.41%; misfit 0.57%: the low-density
+  // pass and backward matches at the pruned nodes, no pre-alignment); 4.27% without the backward matches
   // (TOPOTRACK_TEST_BACKWARD_WEIGHT=0;
   // 4.13% before the rotation retraction), 4.02% with them at every node
   // (TOPOTRACK_TEST_BACKWARD_ALL_MISFIT=0); 5.09% with the paper's scheme alone.
