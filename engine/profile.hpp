@@ -26,6 +26,12 @@ struct TrackerParams {
   //! resampling. 0 is the paper's exact rule; then every node that M and S put on different sides makes
   //! its cells complex.
   double topology_tolerance = 0.5;
+  //! Components of S_n and M whose bounding-box diagonal is at most this many voxels are matched after
+  //! ConstrainTopology(M, φ_S) (engine/small_components.hpp): one of S that M does not come within half a
+  //! voxel of is copied into M, one of M that S does not come within half a voxel of is removed. The lattice
+  //! cannot see a droplet thinner than a voxel, so without this M loses it. 0 is the paper's rule (nothing
+  //! matched).
+  double small_component_voxels = 8;
   //! Lattice nodes closer than this (in voxels) to the surface get the exact sign of the mesh (OpenVDB's
   //! can be wrong at concave creases, which made ConstrainTopology(M, φ_M) resample clean regions).
   double exact_sign_band = 0.25;

@@ -4,6 +4,7 @@
 #include <utility>
 
 #include "engine/agree_near_surface.hpp"
+#include "engine/small_components.hpp"
 #include "io/error.hpp"
 #include "kernels/mesh/mesh_convert.hpp"
 #include "kernels/mesh/mesh_queries.hpp"
@@ -145,6 +146,15 @@ struct Tracker::Impl {
         report.seconds.topology += since(t0);
       }
       report.complex_cells_target = constrain(*phi_s, report.complex_reasons_target);  // line 11
+      if (params.small_component_voxels > 0 && target.n_faces() > 0) {
+        const auto t0 = Clock::now();
+        if (!frame.target) frame.target = std::make_unique<TargetSurface>(TargetSurface::from_mesh(target));
+        const SmallComponentReport r = match_small_components(
+            mesh, *frame.target, 0.5 * voxel_size, params.small_component_voxels * voxel_size, edge_length, &events);
+        report.small_components_added = r.added;
+        report.small_components_removed = r.removed;
+        report.seconds.topology += since(t0);
+      }
     }
     if (mesh.n_faces() > 0) improve(&events);  // line 12
 

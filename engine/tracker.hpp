@@ -53,6 +53,8 @@ struct FrameReport {
   int coarse_pass_iterations = 0;  //!< rounds of the low-density large-motion pass (0: it did not run)
   //! ConstrainTopology calls that could not produce a valid mesh and were skipped (M kept as it was).
   std::size_t topology_failures = 0;
+  //! Components below the lattice's resolution that M took from S_n or dropped (engine/small_components.hpp).
+  std::size_t small_components_added = 0, small_components_removed = 0;
   std::vector<std::string> warnings;
   StageSeconds seconds;
 };
