@@ -237,6 +237,14 @@ SmallComponentReport match_small_components(SurfaceMesh& mesh, const TargetSurfa
   std::vector<VertexId> out_ids = rest.ids;
   Soup out_tris = rest.tris;
   std::vector<Index> copy(s_pos.size(), kInvalidIndex);
+  // Their triangles, gathered in one pass (a spray of thousands of droplets must not cost a pass each).
+  std::vector<Soup> candidate_tris(s_small.vertices.size());
+  std::vector<char> is_candidate(s_small.vertices.size(), 0);
+  for (std::size_t c : candidates) is_candidate[c] = 1;
+  for (const auto& t : target.triangles()) {
+    const Index c = s_small.label[t[0]];
+    if (c != kInvalidIndex && is_candidate[c]) candidate_tris[c].push_back(t);
+  }
   for (std::size_t c : candidates) {
     const std::vector<Index>& vs = s_small.vertices[c];
     if (any_near(rest.scene(), s_pos, vs, radius)) continue;
@@ -248,8 +256,7 @@ SmallComponentReport match_small_components(SurfaceMesh& mesh, const TargetSurfa
         copy[v] = Index(out_pos.size());
         out_pos.push_back(s_pos[v]);
       }
-      for (const auto& t : target.triangles())
-        if (s_small.label[t[0]] == Index(c)) out_tris.push_back({copy[t[0]], copy[t[1]], copy[t[2]]});
+      for (const auto& t : candidate_tris[c]) out_tris.push_back({copy[t[0]], copy[t[1]], copy[t[2]]});
     }
     patch.clear();
     for (std::size_t i = first; i < out_pos.size(); ++i) {
