@@ -237,19 +237,21 @@ SmallComponentReport match_small_components(SurfaceMesh& mesh, const TargetSurfa
   std::vector<VertexId> out_ids = rest.ids;
   Soup out_tris = rest.tris;
   std::vector<Index> copy(s_pos.size(), kInvalidIndex);
-  // Their triangles, gathered in one pass (a spray of thousands of droplets must not cost a pass each).
+  // One at most 2√2 L across becomes an octahedron; the triangles of the others are gathered in one pass (a
+  // spray of thousands of droplets must not cost a pass each).
+  const double octahedron_extent = 2 * std::sqrt(2.0) * edge_length;
   std::vector<Soup> candidate_tris(s_small.vertices.size());
-  std::vector<char> is_candidate(s_small.vertices.size(), 0);
-  for (std::size_t c : candidates) is_candidate[c] = 1;
+  std::vector<char> copied_as_is(s_small.vertices.size(), 0);
+  for (std::size_t c : candidates) copied_as_is[c] = s_small.extent[c] > octahedron_extent;
   for (const auto& t : target.triangles()) {
     const Index c = s_small.label[t[0]];
-    if (c != kInvalidIndex && is_candidate[c]) candidate_tris[c].push_back(t);
+    if (c != kInvalidIndex && copied_as_is[c]) candidate_tris[c].push_back(t);
   }
   for (std::size_t c : candidates) {
     const std::vector<Index>& vs = s_small.vertices[c];
     if (any_near(rest.scene(), s_pos, vs, radius)) continue;
     const std::size_t first = out_pos.size();
-    if (s_small.extent[c] <= 2 * std::sqrt(2.0) * edge_length) {
+    if (!copied_as_is[c]) {
       append_octahedron(s_pos, vs, out_pos, out_tris);
     } else {
       for (Index v : vs) {

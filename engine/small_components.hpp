@@ -26,7 +26,7 @@ struct SmallComponentReport {
 };
 
 //! `target` is the scene of S_n. `radius`: a component counts as present in the other surface when one of its
-//! vertices lies within this distance of it (the tracker passes half a voxel, its topology tolerance).
+//! vertices lies within this distance of it (the tracker passes half a voxel).
 //! M keeps its vertex order and ids; it is rebuilt only when something changes. Deterministic.
 SmallComponentReport match_small_components(SurfaceMesh& mesh, const TargetSurface& target, double radius,
                                             double max_extent, double edge_length, EventList* events);
