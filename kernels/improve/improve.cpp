@@ -102,10 +102,11 @@ public:
     rep_.min_edge_length = lmin_;
     rep_.max_edge_length = lmax_;
     Survey s;
+    bool full_survey = true;
     for (int it = 0; it < p_.max_iterations; ++it) {
       auto t0 = Clock::now();
       // After a busy round the parallel full scan is cheaper than gathering the touched neighbourhoods.
-      if (it == 0 || touched_.size() > m_.vertices_size() / 8)
+      if (std::exchange(full_survey, false) || touched_.size() > m_.vertices_size() / 8)
         survey_all(s);
       else
         survey_touched(s);
@@ -130,7 +131,13 @@ public:
         t0 = Clock::now();
         ops = p_.enable_relaxation ? relax_pass() : 0;
         rep_.seconds_bad_triangles += since(t0);
-        if (ops == 0) break;
+        if (ops > 0) continue;
+        // The last resort for a needle below kVeryBadAngleDeg that nothing removed (a full survey finds
+        // it): crease collapses judged by the two-ring (crease_collapse_ok) from the next round on.
+        if (wide_crease_span_) break;
+        survey_all(s);
+        if (!any_below(s.bad_faces, q_very_bad_)) break;
+        wide_crease_span_ = full_survey = true;
       }
     }
   }
@@ -171,6 +178,12 @@ private:
     const double round2 = 3.0 * (m * 0x1p-24) * (m * 0x1p-24);
     if (q_bad2_ >= kRoundingSafeQuality * kRoundingSafeQuality && lmin > 1e8 * round2) return false;
     return is_near_degenerate(p0, p1, p2);
+  }
+  //! Whether a live face among the candidates has quality below q.
+  bool any_below(const Candidates& faces, double q) const {
+    for (const auto& [key, fi] : faces)
+      if (!m_.is_deleted(Face(fi)) && quality(Face(fi)) < q) return true;
+    return false;
   }
   //! Normals more than 180° - min_dihedral apart (degenerate faces have no normal and fold nothing).
   bool normals_fold(const Vec3& n0, const Vec3& n1) const {
@@ -345,12 +358,29 @@ private:
   //! Whether a collapse of the edge (pa, pb) may sharpen a crease or add a fold (ImproveParams::
   //! crease_collapse_fraction): the edge is that much shorter than L_min and the one-ring around it (ring_, as
   //! try_collapse gathered it) spans at least L_min, so that a speck smaller than L_min is not folded up.
-  bool crease_collapse_ok(const Vec3& pa, const Vec3& pb) const {
+  //! As the last resort (wide_crease_span_) the two-ring of a collapse removing a triangle below
+  //! kVeryBadAngleDeg (old_q) may span L_min instead: in a sheet thinner than L_min pressed flat by the
+  //! alignment every edge may be shorter than L_min (resurfaced pcow at half-L voxels), its one-rings span less
+  //! though the sheet is large, and its needles stayed below 2°. Not before: allowing it from the start changed
+  //! the default profile's runs for the worse (resurfaced samba: topology as the input's in 38 -> 35 of 40
+  //! frames, a trajectory where the other operations had removed such needles otherwise).
+  bool crease_collapse_ok(const Vec3& pa, const Vec3& pb, double old_q) const {
     if (!((pa - pb).squaredNorm() < lcrease2_)) return false;
     Vec3 lo = pa, hi = pa;
     for (const RingFace& r : ring_) {
       lo = lo.cwiseMin(pos(r.w1));
       hi = hi.cwiseMax(pos(r.w1));
+    }
+    if ((hi - lo).squaredNorm() >= lmin2_) return true;
+    if (!wide_crease_span_ || !(old_q < q_very_bad_)) return false;
+    for (const RingFace& r : ring_) {
+      const Halfedge g0 = m_.halfedge(r.w1);
+      Halfedge g = g0;
+      do {
+        lo = lo.cwiseMin(pos(m_.to_vertex(g)));
+        hi = hi.cwiseMax(pos(m_.to_vertex(g)));
+        g = m_.ccw_rotated(g);
+      } while (g != g0);
     }
     return (hi - lo).squaredNorm() >= lmin2_;
   }
@@ -502,7 +532,7 @@ private:
         new_worst = std::min(new_worst, normal_cos(r.n_new, r.n_out));
       }
       const auto [old_worst, old_folds] = creases_before_collapse(a, b);
-      if ((new_worst < old_worst || new_folds > old_folds) && !crease_collapse_ok(pa, pb)) return false;
+      if ((new_worst < old_worst || new_folds > old_folds) && !crease_collapse_ok(pa, pb, old_q)) return false;
     }
     // Short collapses are bounded too: on a ridge the midpoint of an edge across it cuts the ridge off, and
     // a few such cuts in a row moved the surface of resurfaced frames by 0.34 L (elephant frame 3); the
@@ -1053,6 +1083,7 @@ private:
   std::vector<Index> touched_, local_edges_, local_faces_;
   std::vector<Index> unfixed_;  // bad triangles that no flip or collapse fixed since the last relax_pass
   std::vector<std::pair<Index, Index>> unfixed_short_;  // short edges (end points) no collapse removed
+  bool wide_crease_span_ = false;  // crease_collapse_ok's last resort is on
   std::vector<std::uint8_t> vtouched_;
   std::vector<std::uint32_t> estamp_, fstamp_;
   std::uint32_t stamp_ = 0;

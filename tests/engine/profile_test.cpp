@@ -37,6 +37,9 @@ TEST(Profile, EveryBundledProfileLoads) {
   // A denser graph for squashing bodies (tests/kernels/registration/coarse_drift_test.cpp).
   EXPECT_EQ(load_profile("capture").coarse_params.node_spacing_factor, 2);
   EXPECT_EQ(load_profile("capture").coarse_params.max_iterations_per_level_after_pass, 8);  // 3 drifted more
+  // Voxels half an edge length keep parts one edge length thick (tests/engine/tracker_real_data_test.cpp).
+  EXPECT_EQ(load_profile("capture").voxel_size_factor, 0.5);
+  EXPECT_EQ(load_profile("default").voxel_size_factor, 1.0);  // the paper's
   EXPECT_EQ(load_profile("default").coarse_params.max_iterations_per_level_after_pass, 3);
   EXPECT_EQ(load_profile("default").coarse_params.node_spacing_factor, 4);  // the paper's
 }

@@ -326,6 +326,26 @@ TEST(Improve, CollapsesNeedleInCrease) {
   EXPECT_LE(after.dihedral_below_45deg, before.dihedral_below_45deg);
 }
 
+// Needles in a sheet thinner than L_min that the alignment pressed flat (both sides within 0.02 L), where every
+// edge is shorter than L_min: collapsing a needle's short edge creases the sheet, which crease_collapse_fraction
+// allows only where the neighbourhood spans L_min. Their one-rings span 0.3-0.4 L, so the needles stayed (1.15°);
+// their two-rings span more than L_min.
+TEST(Improve, CollapsesNeedlesInFlatSheet) {
+  SurfaceMesh m = to_surface_mesh(
+      read_mesh(std::filesystem::path(TOPOTRACK_SOURCE_DIR) / "tests/data/improve/flat_sheet.obj"));
+  ASSERT_GT(quality_stats(m).below_2deg, 0u);
+  ImproveParams p;
+  p.target_edge_length = 0.012825873421360611;  // the tracked sequence's L
+  p.validate_each_step = true;
+  const long g = genus(m);
+  improve_mesh(m, p);
+  const QualityStats q = quality_stats(m);
+  EXPECT_EQ(q.below_2deg, 0u);
+  EXPECT_GE(q.min_angle_deg, 2.0);
+  EXPECT_EQ(q.dihedral_below_45deg, 0u);
+  EXPECT_EQ(genus(m), g);
+}
+
 TEST(Improve, InflatesFoldInTubeTangle) {
   // A fold (24.8°) where tubes thinner than L_min meet: every collapse pinches a tube and the only move
   // that removes the fold leaves a triangle of 4° at one corner (a small angle is tolerated, a fold is
