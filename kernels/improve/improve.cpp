@@ -132,8 +132,9 @@ public:
         ops = p_.enable_relaxation ? relax_pass() : 0;
         rep_.seconds_bad_triangles += since(t0);
         if (ops > 0) continue;
-        // The last resort for a needle below kVeryBadAngleDeg that nothing removed (a full survey finds
-        // it): crease collapses judged by the two-ring (crease_collapse_ok) from the next round on.
+        // The last resort for a triangle below kVeryBadAngleDeg that nothing removed (a full survey finds
+        // it), from the next round on: crease collapses judged by the two-ring (crease_collapse_ok) and
+        // fold-mode collapses of a valence-3 corner that blocks a collapse (collapse_unblocking).
         if (wide_crease_span_) break;
         survey_all(s);
         if (!any_below(s.bad_faces, q_very_bad_)) break;
@@ -358,21 +359,23 @@ private:
   //! Whether a collapse of the edge (pa, pb) may sharpen a crease or add a fold (ImproveParams::
   //! crease_collapse_fraction): the edge is that much shorter than L_min and the one-ring around it (ring_, as
   //! try_collapse gathered it) spans at least L_min, so that a speck smaller than L_min is not folded up.
-  //! As the last resort (wide_crease_span_) the two-ring of a collapse removing a triangle below
-  //! kVeryBadAngleDeg (old_q) may span L_min instead: in a sheet thinner than L_min pressed flat by the
-  //! alignment every edge may be shorter than L_min (resurfaced pcow at half-L voxels), its one-rings span less
-  //! though the sheet is large, and its needles stayed below 2°. Not before: allowing it from the start changed
-  //! the default profile's runs for the worse (resurfaced samba: topology as the input's in 38 -> 35 of 40
-  //! frames, a trajectory where the other operations had removed such needles otherwise).
+  //! As the last resort (wide_crease_span_) a collapse removing a triangle below kVeryBadAngleDeg (old_q) may
+  //! go for any edge below L_min, and where its two-ring spans L_min: in a sheet thinner than L_min pressed flat
+  //! by the alignment every edge may be shorter than L_min (resurfaced pcow at half-L voxels), its one-rings
+  //! span less though the sheet is large, and needles and caps stayed below 2° (a cap's short edges are longer
+  //! than the fraction: `gen splash` frame 25). Not before: allowing the two-ring from the start changed the
+  //! default profile's runs for the worse (resurfaced samba: topology as the input's in 38 -> 35 of 40 frames,
+  //! a trajectory where the other operations had removed such needles otherwise).
   bool crease_collapse_ok(const Vec3& pa, const Vec3& pb, double old_q) const {
-    if (!((pa - pb).squaredNorm() < lcrease2_)) return false;
+    const bool last_resort = wide_crease_span_ && old_q < q_very_bad_ && lcrease2_ > 0;  // fraction 0: none
+    if (!((pa - pb).squaredNorm() < (last_resort ? lmin2_ : lcrease2_))) return false;
     Vec3 lo = pa, hi = pa;
     for (const RingFace& r : ring_) {
       lo = lo.cwiseMin(pos(r.w1));
       hi = hi.cwiseMax(pos(r.w1));
     }
     if ((hi - lo).squaredNorm() >= lmin2_) return true;
-    if (!wide_crease_span_ || !(old_q < q_very_bad_)) return false;
+    if (!last_resort) return false;
     for (const RingFace& r : ring_) {
       const Halfedge g0 = m_.halfedge(r.w1);
       Halfedge g = g0;
@@ -588,7 +591,10 @@ private:
       } while (g != g0 && k < 3);
       std::sort(spokes.begin(), spokes.end());
       for (const auto& [l2, spoke] : spokes) {
-        if (!try_collapse(spoke, CollapseMode::Short)) continue;
+        // As the last resort a fold-mode collapse (the exact deviation bounds it, no new fold may result): the
+        // midpoint of a spoke of a spike much shorter than L_min turns a face over against the neighbourhood.
+        if (!try_collapse(spoke, CollapseMode::Short) && !(wide_crease_span_ && try_collapse(spoke, CollapseMode::Fold)))
+          continue;
         if (m_.is_deleted(a) || m_.is_deleted(b)) return 1;
         const Halfedge ab = m_.find_halfedge(a, b);
         return 1 + (ab.is_valid() && try_collapse(SurfaceMesh::edge(ab), mode));

@@ -346,6 +346,25 @@ TEST(Improve, CollapsesNeedlesInFlatSheet) {
   EXPECT_EQ(genus(m), g);
 }
 
+// Needles (0.62°) around the base of a spike much shorter than L_min whose tip has valence 3: the base's edges
+// may not collapse while the tip stands (link condition), and the midpoint collapse of a spoke turns a face
+// over against the neighbourhood's normal. As the last resort the tip goes by a fold-mode collapse (the exact
+// deviation bounds it, no new fold), then the base's edges.
+TEST(Improve, RemovesSpikeAboveNeedles) {
+  SurfaceMesh m = to_surface_mesh(read_mesh(std::filesystem::path(TOPOTRACK_SOURCE_DIR) / "tests/data/improve/spike.obj"));
+  ASSERT_GT(quality_stats(m).below_2deg, 0u);
+  ImproveParams p;
+  p.target_edge_length = 0.012825873421360611;  // the tracked sequence's L
+  p.validate_each_step = true;
+  const long g = genus(m);
+  improve_mesh(m, p);
+  const QualityStats q = quality_stats(m);
+  EXPECT_EQ(q.below_2deg, 0u);
+  EXPECT_GE(q.min_angle_deg, 2.0);
+  EXPECT_EQ(q.dihedral_below_45deg, 0u);
+  EXPECT_EQ(genus(m), g);
+}
+
 TEST(Improve, InflatesFoldInTubeTangle) {
   // A fold (24.8°) where tubes thinner than L_min meet: every collapse pinches a tube and the only move
   // that removes the fold leaves a triangle of 4° at one corner (a small angle is tolerated, a fold is
