@@ -326,16 +326,12 @@ TEST(Improve, CollapsesNeedleInCrease) {
   EXPECT_LE(after.dihedral_below_45deg, before.dihedral_below_45deg);
 }
 
-// Needles in a sheet thinner than L_min that the alignment pressed flat (both sides within 0.02 L), where every
-// edge is shorter than L_min: collapsing a needle's short edge creases the sheet, which crease_collapse_fraction
-// allows only where the neighbourhood spans L_min. Their one-rings span 0.3-0.4 L, so the needles stayed (1.15°);
-// their two-rings span more than L_min.
-TEST(Improve, CollapsesNeedlesInFlatSheet) {
-  SurfaceMesh m = to_surface_mesh(
-      read_mesh(std::filesystem::path(TOPOTRACK_SOURCE_DIR) / "tests/data/improve/flat_sheet.obj"));
-  ASSERT_GT(quality_stats(m).below_2deg, 0u);
+//! A cut-out of a tracked pcow frame (tests/data/improve/), improved with the tracked sequence's L, checked step by
+//! step: it ends with no triangle below 2°, no fold and its genus.
+void expect_fixture_fixed(const char* name) {
+  SurfaceMesh m = to_surface_mesh(read_mesh(std::filesystem::path(TOPOTRACK_SOURCE_DIR) / "tests/data/improve" / name));
   ImproveParams p;
-  p.target_edge_length = 0.012825873421360611;  // the tracked sequence's L
+  p.target_edge_length = 0.012825873421360611;
   p.validate_each_step = true;
   const long g = genus(m);
   improve_mesh(m, p);
@@ -344,6 +340,20 @@ TEST(Improve, CollapsesNeedlesInFlatSheet) {
   EXPECT_GE(q.min_angle_deg, 2.0);
   EXPECT_EQ(q.dihedral_below_45deg, 0u);
   EXPECT_EQ(genus(m), g);
+}
+
+QualityStats fixture_quality(const char* name) {
+  return quality_stats(
+      to_surface_mesh(read_mesh(std::filesystem::path(TOPOTRACK_SOURCE_DIR) / "tests/data/improve" / name)));
+}
+
+// Needles in a sheet thinner than L_min that the alignment pressed flat, where every edge is shorter than
+// L_min: collapsing a needle's short edge creases the sheet, which crease_collapse_fraction allows only where
+// the neighbourhood spans L_min. Their one-rings span less, so the needles stayed (1.15°); as the last resort
+// their two-rings are judged, which span more than L_min.
+TEST(Improve, CollapsesNeedlesInFlatSheet) {
+  ASSERT_GT(fixture_quality("flat_sheet.obj").below_2deg, 0u);
+  expect_fixture_fixed("flat_sheet.obj");
 }
 
 // Needles (0.62°) around the base of a spike much shorter than L_min whose tip has valence 3: the base's edges
@@ -351,36 +361,16 @@ TEST(Improve, CollapsesNeedlesInFlatSheet) {
 // over against the neighbourhood's normal. As the last resort the tip goes by a fold-mode collapse (the exact
 // deviation bounds it, no new fold), then the base's edges.
 TEST(Improve, RemovesSpikeAboveNeedles) {
-  SurfaceMesh m = to_surface_mesh(read_mesh(std::filesystem::path(TOPOTRACK_SOURCE_DIR) / "tests/data/improve/spike.obj"));
-  ASSERT_GT(quality_stats(m).below_2deg, 0u);
-  ImproveParams p;
-  p.target_edge_length = 0.012825873421360611;  // the tracked sequence's L
-  p.validate_each_step = true;
-  const long g = genus(m);
-  improve_mesh(m, p);
-  const QualityStats q = quality_stats(m);
-  EXPECT_EQ(q.below_2deg, 0u);
-  EXPECT_GE(q.min_angle_deg, 2.0);
-  EXPECT_EQ(q.dihedral_below_45deg, 0u);
-  EXPECT_EQ(genus(m), g);
+  ASSERT_GT(fixture_quality("spike.obj").below_2deg, 0u);
+  expect_fixture_fixed("spike.obj");
 }
 
+// A fold (24.8°) where tubes thinner than L_min meet: every collapse pinches a tube and the only move that
+// removes the fold leaves a triangle of 4° at one corner (a small angle is tolerated, a fold is not; the
+// bad-triangle pass then brings the angles back to 10°).
 TEST(Improve, InflatesFoldInTubeTangle) {
-  // A fold (24.8°) where tubes thinner than L_min meet: every collapse pinches a tube and the only move
-  // that removes the fold leaves a triangle of 4° at one corner (a small angle is tolerated, a fold is
-  // not; the bad-triangle pass then brings the angles back to 10°).
-  SurfaceMesh m = to_surface_mesh(
-      read_mesh(std::filesystem::path(TOPOTRACK_SOURCE_DIR) / "tests/data/improve/tube_tangle.obj"));
-  ASSERT_GT(quality_stats(m).dihedral_below_45deg, 1u);  // the fold and the creases along the fans' rims
-  ImproveParams p;
-  p.target_edge_length = 0.012825873421360611;  // the tracked sequence's L
-  p.validate_each_step = true;
-  const long g = genus(m);
-  improve_mesh(m, p);
-  const QualityStats q = quality_stats(m);
-  EXPECT_EQ(q.dihedral_below_45deg, 0u);
-  EXPECT_EQ(q.below_2deg, 0u);
-  EXPECT_EQ(genus(m), g);
+  ASSERT_GT(fixture_quality("tube_tangle.obj").dihedral_below_45deg, 1u);  // the fold and the creases along the fans' rims
+  expect_fixture_fixed("tube_tangle.obj");
 }
 
 TEST(Improve, AlreadyGoodMeshIsLeftUnchanged) {
