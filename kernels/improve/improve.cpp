@@ -135,10 +135,10 @@ public:
         // The last resort for a triangle below kVeryBadAngleDeg that nothing removed (a full survey finds
         // it), from the next round on: crease collapses judged by the two-ring (crease_collapse_ok) and
         // fold-mode collapses of a valence-3 corner that blocks a collapse (collapse_unblocking).
-        if (wide_crease_span_) break;
+        if (last_resort_) break;
         survey_all(s);
         if (!any_below(s.bad_faces, q_very_bad_)) break;
-        wide_crease_span_ = full_survey = true;
+        last_resort_ = full_survey = true;
       }
     }
   }
@@ -359,7 +359,7 @@ private:
   //! Whether a collapse of the edge (pa, pb) may sharpen a crease or add a fold (ImproveParams::
   //! crease_collapse_fraction): the edge is that much shorter than L_min and the one-ring around it (ring_, as
   //! try_collapse gathered it) spans at least L_min, so that a speck smaller than L_min is not folded up.
-  //! As the last resort (wide_crease_span_) a collapse removing a triangle below kVeryBadAngleDeg (old_q) may
+  //! Once the last resort is on (last_resort_), a collapse removing a triangle below kVeryBadAngleDeg (old_q) may
   //! go for any edge below L_min, and where its two-ring spans L_min: in a sheet thinner than L_min pressed flat
   //! by the alignment every edge may be shorter than L_min (resurfaced pcow at half-L voxels), its one-rings
   //! span less though the sheet is large, and needles and caps stayed below 2° (a cap's short edges are longer
@@ -367,15 +367,15 @@ private:
   //! default profile's runs for the worse (resurfaced samba: topology as the input's in 38 -> 35 of 40 frames,
   //! a trajectory where the other operations had removed such needles otherwise).
   bool crease_collapse_ok(const Vec3& pa, const Vec3& pb, double old_q) const {
-    const bool last_resort = wide_crease_span_ && old_q < q_very_bad_ && lcrease2_ > 0;  // fraction 0: none
-    if (!((pa - pb).squaredNorm() < (last_resort ? lmin2_ : lcrease2_))) return false;
+    const bool wide = last_resort_ && old_q < q_very_bad_ && lcrease2_ > 0;  // fraction 0: no crease collapse
+    if (!((pa - pb).squaredNorm() < (wide ? lmin2_ : lcrease2_))) return false;
     Vec3 lo = pa, hi = pa;
     for (const RingFace& r : ring_) {
       lo = lo.cwiseMin(pos(r.w1));
       hi = hi.cwiseMax(pos(r.w1));
     }
     if ((hi - lo).squaredNorm() >= lmin2_) return true;
-    if (!last_resort) return false;
+    if (!wide) return false;
     for (const RingFace& r : ring_) {
       const Halfedge g0 = m_.halfedge(r.w1);
       Halfedge g = g0;
@@ -593,7 +593,7 @@ private:
       for (const auto& [l2, spoke] : spokes) {
         // As the last resort a fold-mode collapse (the exact deviation bounds it, no new fold may result): the
         // midpoint of a spoke of a spike much shorter than L_min turns a face over against the neighbourhood.
-        if (!try_collapse(spoke, CollapseMode::Short) && !(wide_crease_span_ && try_collapse(spoke, CollapseMode::Fold)))
+        if (!try_collapse(spoke, CollapseMode::Short) && !(last_resort_ && try_collapse(spoke, CollapseMode::Fold)))
           continue;
         if (m_.is_deleted(a) || m_.is_deleted(b)) return 1;
         const Halfedge ab = m_.find_halfedge(a, b);
@@ -1089,7 +1089,7 @@ private:
   std::vector<Index> touched_, local_edges_, local_faces_;
   std::vector<Index> unfixed_;  // bad triangles that no flip or collapse fixed since the last relax_pass
   std::vector<std::pair<Index, Index>> unfixed_short_;  // short edges (end points) no collapse removed
-  bool wide_crease_span_ = false;  // crease_collapse_ok's last resort is on
+  bool last_resort_ = false;  // a fixed point with a triangle below kVeryBadAngleDeg was reached (run)
   std::vector<std::uint8_t> vtouched_;
   std::vector<std::uint32_t> estamp_, fstamp_;
   std::uint32_t stamp_ = 0;

@@ -79,7 +79,9 @@ struct ImproveReport {
 //! where neither can go (a needle on a tube so thin that its collapse would pinch it, a cap between
 //! creases) a tangential relaxation moves a corner (enable_relaxation; no event, the vertex keeps its id).
 //! In a neighbourhood that is creased already an operation may go if it neither sharpens the sharpest
-//! crease nor adds a fold. The mesh is compacted at the end (ids survive). A mesh already within bounds is left
+//! crease nor adds a fold. Where that leaves a triangle below 2° at the fixed point, a last resort may collapse
+//! into a crease where the two-ring spans L_min and collapse a valence-3 spike tip in fold mode. The mesh is
+//! compacted at the end (ids survive). A mesh already within bounds is left
 //! bit-identical with zero events after one parallel O(n) scan. Deterministic for any thread count
 //! (candidates are found in parallel, operations applied serially in a fixed order).
 //! \pre mesh is a closed 2-manifold.  \throw InvalidInput on bad parameters or an open mesh (boundary edges).
