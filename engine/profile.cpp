@@ -30,6 +30,7 @@ std::vector<Binding> bindings(TrackerParams& p) {
       {"tracker.sdf_half_width", &p.sdf_half_width, 1.75, 64},  // below √3 cells lose corner values
       {"tracker.topology_tolerance", &p.topology_tolerance, 0, 2},
       {"tracker.small_component_voxels", &p.small_component_voxels, 0, 1e6},
+      {"tracker.topology_refinements", &p.topology_refinements, 0, 3},
       {"tracker.exact_sign_band", &p.exact_sign_band, 0, 3},
       {"tracker.coarse", &p.coarse},
       {"tracker.fine", &p.fine},

@@ -67,9 +67,9 @@ struct Tracker::Impl {
     return cells;
   }
 
-  openvdb::FloatGrid::Ptr distance(const SurfaceMesh& m) {
+  openvdb::FloatGrid::Ptr distance(const SurfaceMesh& m, double h) {
     const auto t0 = Clock::now();
-    auto grid = signed_distance(m, voxel_size, params.sdf_half_width, params.exact_sign_band);
+    auto grid = signed_distance(m, h, params.sdf_half_width, params.exact_sign_band);
     report.seconds.signed_distance += since(t0);
     return grid;
   }
@@ -105,6 +105,88 @@ struct Tracker::Impl {
     improve(nullptr);
   }
 
+  //! Lines 8-12 of Algorithm 1 on a lattice of voxel size h: ConstrainTopology against φ_M and φ_S (§4.3),
+  //! the small components (engine/small_components.hpp), then ImproveMesh(M).
+  void topology_lines(PreparedFrame& frame, double h) {
+    const SurfaceMesh& target = frame.surface;
+    openvdb::FloatGrid::Ptr phi_m;
+    if (mesh.n_faces() > 0) {
+      phi_m = distance(mesh, h);                                                   // line 8
+      report.complex_cells_self = constrain(*phi_m, report.complex_reasons_self);  // line 9
+    }
+    openvdb::FloatGrid::Ptr phi_s;  // line 10, usually done by prepare
+    if (frame.phi && frame.voxel_size == h) phi_s = std::move(frame.phi);
+    else phi_s = distance(target, h);
+    if (phi_m && params.topology_tolerance > 0) {
+      const auto t0 = Clock::now();
+      agree_near_surface(*phi_s, *phi_m, params.topology_tolerance * h);
+      report.seconds.topology += since(t0);
+    }
+    report.complex_cells_target = constrain(*phi_s, report.complex_reasons_target);  // line 11
+    report.small_components_added = report.small_components_removed = 0;
+    if (params.small_component_voxels > 0 && target.n_faces() > 0) {
+      const auto t0 = Clock::now();
+      if (!frame.target) frame.target = std::make_unique<TargetSurface>(TargetSurface::from_mesh(target));
+      const SmallComponentReport r = match_small_components(mesh, *frame.target, 0.5 * h,
+                                                            params.small_component_voxels * h, edge_length, &events);
+      report.small_components_added = r.added;
+      report.small_components_removed = r.removed;
+      report.seconds.topology += since(t0);
+    }
+    if (mesh.n_faces() > 0) improve(&events);  // line 12
+  }
+
+  //! topology_lines with TrackerParams::topology_refinements: when M's components or Euler characteristic
+  //! are not S_n's, the lines are redone from M after line 7 on lattices of half the voxel size, and a finer
+  //! result replaces the first only when its topology is S_n's and its mesh quality is no worse.
+  void refined_topology_lines(PreparedFrame& frame) {
+    const SurfaceMesh& target = frame.surface;
+    const Index want_components = connected_components(target);
+    const long want_euler = euler_characteristic(target);
+    const auto matches = [&] {
+      return connected_components(mesh) == want_components && euler_characteristic(mesh) == want_euler;
+    };
+    const SurfaceMesh aligned = mesh.clone();
+    const EventList aligned_events = events;
+    const FrameReport aligned_report = report;
+    topology_lines(frame, voxel_size);
+    if (matches()) return;
+    const QualityStats first = quality_stats(mesh);
+    SurfaceMesh kept = std::move(mesh);
+    EventList kept_events = std::move(events);
+    const FrameReport kept_report = report;
+    double h = voxel_size;
+    for (int level = 1; level <= params.topology_refinements; ++level) {
+      mesh = aligned.clone();
+      events = aligned_events;
+      report.topology_failures = aligned_report.topology_failures;
+      report.warnings = aligned_report.warnings;
+      h *= 0.5;
+      topology_lines(frame, h);
+      ++report.topology_retries;
+      if (!matches()) continue;
+      const auto worse = [&](const QualityStats& q) {
+        return q.below_2deg > first.below_2deg || q.dihedral_below_45deg > first.dihedral_below_45deg;
+      };
+      // The finer cut leaves smaller triangles for line 12 to coarsen; one more ImproveMesh pass often
+      // still finds work there and removes what would reject this result (resurfaced pcow, capture
+      // profile: topology as the input's in 25 of 40 frames with it, 23 without; docs/results.md).
+      if (worse(quality_stats(mesh))) improve(&events);
+      if (worse(quality_stats(mesh))) continue;
+      report.topology_level = level;
+      return;
+    }
+    // No finer lattice gave S_n's topology with no worse quality: the first result stays, with its report
+    // (the seconds count every attempt).
+    mesh = std::move(kept);
+    events = std::move(kept_events);
+    const StageSeconds seconds = report.seconds;
+    const int retries = report.topology_retries;
+    report = kept_report;
+    report.seconds = seconds;
+    report.topology_retries = retries;
+  }
+
   void next_frame(PreparedFrame& frame) {
     const SurfaceMesh& target = frame.surface;
     const IdField before = position_field(mesh);
@@ -131,32 +213,13 @@ struct Tracker::Impl {
       }
     }
     if (mesh.n_faces() > 0) improve(&events);  // line 7
-    if (params.topology) {
-      openvdb::FloatGrid::Ptr phi_m;
-      if (mesh.n_faces() > 0) {
-        phi_m = distance(mesh);                               // line 8
-        report.complex_cells_self = constrain(*phi_m, report.complex_reasons_self);  // line 9
-      }
-      openvdb::FloatGrid::Ptr phi_s;                          // line 10, usually done by prepare
-      if (frame.phi && frame.voxel_size == voxel_size) phi_s = std::move(frame.phi);
-      else phi_s = distance(target);
-      if (phi_m && params.topology_tolerance > 0) {
-        const auto t0 = Clock::now();
-        agree_near_surface(*phi_s, *phi_m, params.topology_tolerance * voxel_size);
-        report.seconds.topology += since(t0);
-      }
-      report.complex_cells_target = constrain(*phi_s, report.complex_reasons_target);  // line 11
-      if (params.small_component_voxels > 0 && target.n_faces() > 0) {
-        const auto t0 = Clock::now();
-        if (!frame.target) frame.target = std::make_unique<TargetSurface>(TargetSurface::from_mesh(target));
-        const SmallComponentReport r = match_small_components(
-            mesh, *frame.target, 0.5 * voxel_size, params.small_component_voxels * voxel_size, edge_length, &events);
-        report.small_components_added = r.added;
-        report.small_components_removed = r.removed;
-        report.seconds.topology += since(t0);
-      }
+    if (!params.topology) {
+      if (mesh.n_faces() > 0) improve(&events);  // line 12
+    } else if (params.topology_refinements <= 0 || target.n_faces() == 0) {
+      topology_lines(frame, voxel_size);
+    } else {
+      refined_topology_lines(frame);
     }
-    if (mesh.n_faces() > 0) improve(&events);  // line 12
 
     // Velocity of each vertex from the tracked motion: its position minus where the previous frame's
     // surface point it stands for was (§4.6 forward propagation of positions).

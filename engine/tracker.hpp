@@ -55,6 +55,9 @@ struct FrameReport {
   std::size_t topology_failures = 0;
   //! Components below the lattice's resolution that M took from S_n or dropped (engine/small_components.hpp).
   std::size_t small_components_added = 0, small_components_removed = 0;
+  //! TrackerParams::topology_refinements: lattices tried after the first because M's topology was not
+  //! S_n's, and how many times the voxel size of the one kept was halved (0: the first lattice's result).
+  int topology_retries = 0, topology_level = 0;
   std::vector<std::string> warnings;
   StageSeconds seconds;
 };

@@ -24,10 +24,10 @@ constexpr double kVoxel = 0.05;
 
 //! An incoherent input frame: the marching-cubes surface of the union of spheres (centre, radius), so the
 //! connectivity differs from frame to frame as it does for simulation output.
-SurfaceMesh spheres_frame(const std::vector<std::pair<Vec3, double>>& spheres) {
+SurfaceMesh spheres_frame(const std::vector<std::pair<Vec3, double>>& spheres, double voxel = kVoxel) {
   test::Soup all;
   for (const auto& [c, r] : spheres) all = test::merge(all, test::icosphere(4, r, c));
-  const auto grid = signed_distance(all.positions, all.triangles, kVoxel, 3.0);
+  const auto grid = signed_distance(all.positions, all.triangles, voxel, 3.0);
   return to_surface_mesh(marching_cubes(*grid));
 }
 
@@ -258,6 +258,72 @@ TEST(Tracker, AcceptsLevelSetFrames) {
     EXPECT_NO_THROW(tracker.mesh().validate(true));
   }
   EXPECT_EQ(tracker.report().components, 1u);
+}
+
+//! Two spheres of radius 0.45 on the x axis with a gap between x = lo and x = hi, the input sampled finely
+//! enough (voxel 0.01) to keep the gap open, moving by `t` in y: two components.
+SurfaceMesh spheres_with_gap(double lo, double hi, double t) {
+  return spheres_frame({{Vec3(lo - 0.45, t, 0), 0.45}, {Vec3(hi + 0.45, t, 0), 0.45}}, 0.01);
+}
+
+//! A tracker whose lattice is 0.1 (L 0.05, voxels 2 L): nodes at multiples of 0.1 (and 0.05, 0.025 when
+//! halved), so a gap is seen by a lattice exactly when a node lies in it.
+TrackerParams coarse_lattice(int refinements) {
+  TrackerParams p;
+  p.edge_length = 0.05;
+  p.voxel_size_factor = 2.0;
+  p.topology_refinements = refinements;
+  return p;
+}
+
+TEST(Tracker, RefinesTheLatticeWhereItMissesTheInputsTopology) {
+  // A gap from 0.02 to 0.08 holds no node of the 0.1 lattice, but the node 0.05 of the halved one.
+  std::vector<SurfaceMesh> frames;
+  for (int i = 0; i < 3; ++i) frames.push_back(spheres_with_gap(0.02, 0.08, 0.01 * i));
+  ASSERT_EQ(connected_components(frames[1]), 2);
+  {  // One lattice (the paper's rule): ConstrainTopology bridges the gap it cannot see.
+    Tracker tracker(coarse_lattice(0));
+    tracker.add_frame(frames[0]);
+    const FrameReport& r = tracker.add_frame(frames[1]);
+    EXPECT_EQ(r.components, 1u) << "the test needs a gap the 0.1 lattice misses";
+    EXPECT_EQ(r.topology_retries, 0);
+  }
+  TrackRun one, two;
+  for (int threads : {1, 2}) {
+    tbb::global_control c(tbb::global_control::max_allowed_parallelism, threads);
+    Tracker tracker(coarse_lattice(1));
+    (threads == 1 ? one : two) = track(frames, 0, &tracker);
+    const FrameReport& r = tracker.report();
+    EXPECT_EQ(r.components, 2u);
+    EXPECT_EQ(r.euler, 4);
+    EXPECT_EQ(r.topology_retries, 1);
+    EXPECT_EQ(r.topology_level, 1);
+    EXPECT_NO_THROW(tracker.mesh().validate(true));
+    const QualityStats q = quality_stats(tracker.mesh());
+    EXPECT_EQ(q.below_2deg, 0u);
+    EXPECT_EQ(q.dihedral_below_45deg, 0u);
+  }
+  EXPECT_EQ(one.meshes, two.meshes) << "1 and 2 threads";
+  EXPECT_EQ(one.events, two.events);
+}
+
+TEST(Tracker, KeepsTheFirstResultWhenNoFinerLatticeMatches) {
+  // A gap from 0.055 to 0.095 holds no node of the 0.1 lattice nor of the 0.05 one: the retry cannot help,
+  // and the output is that of one lattice, bit for bit.
+  std::vector<SurfaceMesh> frames;
+  for (int i = 0; i < 3; ++i) frames.push_back(spheres_with_gap(0.055, 0.095, 0.01 * i));
+  ASSERT_EQ(connected_components(frames[1]), 2);
+  Tracker plain(coarse_lattice(0)), refined(coarse_lattice(1));
+  const TrackRun a = track(frames, 0, &plain), b = track(frames, 0, &refined);
+  EXPECT_EQ(refined.report().components, 1u);
+  EXPECT_EQ(refined.report().topology_retries, 1);
+  EXPECT_EQ(refined.report().topology_level, 0);
+  EXPECT_EQ(a.meshes, b.meshes);
+  EXPECT_EQ(a.events, b.events);
+  EXPECT_EQ(refined.report().complex_cells_target, plain.report().complex_cells_target);
+  // Frames whose topology the first lattice gets right are not retried.
+  Tracker easy(coarse_lattice(1));
+  for (double t : {0.0, 0.01}) EXPECT_EQ(easy.add_frame(spheres_with_gap(-0.3, 0.3, t)).topology_retries, 0);
 }
 
 TEST(Tracker, RejectsOpenInput) {
