@@ -40,6 +40,10 @@ TEST(Profile, EveryBundledProfileLoads) {
   // Voxels half an edge length keep parts one edge length thick (tests/engine/tracker_real_data_test.cpp).
   EXPECT_EQ(load_profile("capture").voxel_size_factor, 0.5);
   EXPECT_EQ(load_profile("default").voxel_size_factor, 1.0);  // the paper's
+  // A finer lattice where the topology differs (tests/engine/tracker_test.cpp); the paper has one lattice.
+  EXPECT_EQ(load_profile("capture").topology_refinements, 1);
+  EXPECT_EQ(load_profile("fluid").topology_refinements, 1);
+  EXPECT_EQ(load_profile("default").topology_refinements, 0);
   EXPECT_EQ(load_profile("default").coarse_params.max_iterations_per_level_after_pass, 3);
   EXPECT_EQ(load_profile("default").coarse_params.node_spacing_factor, 4);  // the paper's
 }
