@@ -152,6 +152,9 @@ struct Tracker::Impl {
     topology_lines(frame, voxel_size);
     if (matches()) return;
     const QualityStats first = quality_stats(mesh);
+    const auto worse = [first](const QualityStats& q) {
+      return q.below_2deg > first.below_2deg || q.dihedral_below_45deg > first.dihedral_below_45deg;
+    };
     SurfaceMesh kept = std::move(mesh);
     EventList kept_events = std::move(events);
     const FrameReport kept_report = report;
@@ -165,9 +168,6 @@ struct Tracker::Impl {
       topology_lines(frame, h);
       ++report.topology_retries;
       if (!matches()) continue;
-      const auto worse = [&](const QualityStats& q) {
-        return q.below_2deg > first.below_2deg || q.dihedral_below_45deg > first.dihedral_below_45deg;
-      };
       // The finer cut leaves smaller triangles for line 12 to coarsen; one more ImproveMesh pass often
       // still finds work there and removes what would reject this result (resurfaced pcow, capture
       // profile: topology as the input's in 25 of 40 frames with it, 23 without; docs/results.md).
