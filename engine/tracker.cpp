@@ -106,20 +106,22 @@ struct Tracker::Impl {
   }
 
   //! Lines 8-12 of Algorithm 1 on a lattice of voxel size h: ConstrainTopology against φ_M and φ_S (§4.3),
-  //! the small components (engine/small_components.hpp), then ImproveMesh(M).
-  void topology_lines(PreparedFrame& frame, double h) {
+  //! the small components (engine/small_components.hpp), then ImproveMesh(M). φ_S takes φ_M's sign where the
+  //! two surfaces pass within `agree_within` of a node and the flip keeps φ_S's topology (agree_near_surface;
+  //! 0: never). `self` runs line 9; a refinement (below) leaves it out.
+  void topology_lines(PreparedFrame& frame, double h, bool self, double agree_within) {
     const SurfaceMesh& target = frame.surface;
     openvdb::FloatGrid::Ptr phi_m;
-    if (mesh.n_faces() > 0) {
-      phi_m = distance(mesh, h);                                                   // line 8
-      report.complex_cells_self = constrain(*phi_m, report.complex_reasons_self);  // line 9
+    if (mesh.n_faces() > 0 && (self || agree_within > 0)) {
+      phi_m = distance(mesh, h);                                                             // line 8
+      if (self) report.complex_cells_self = constrain(*phi_m, report.complex_reasons_self);  // line 9
     }
     openvdb::FloatGrid::Ptr phi_s;  // line 10, usually done by prepare
     if (frame.phi && frame.voxel_size == h) phi_s = std::move(frame.phi);
     else phi_s = distance(target, h);
-    if (phi_m && params.topology_tolerance > 0) {
+    if (phi_m && agree_within > 0) {
       const auto t0 = Clock::now();
-      agree_near_surface(*phi_s, *phi_m, params.topology_tolerance * h);
+      agree_near_surface(*phi_s, *phi_m, agree_within);
       report.seconds.topology += since(t0);
     }
     report.complex_cells_target = constrain(*phi_s, report.complex_reasons_target);  // line 11
@@ -137,8 +139,16 @@ struct Tracker::Impl {
   }
 
   //! topology_lines with TrackerParams::topology_refinements: when M's components or Euler characteristic
-  //! are not S_n's, the lines are redone from M after line 7 on lattices of half the voxel size, and a finer
-  //! result replaces the first only when its topology is S_n's and its mesh quality is no worse.
+  //! are not S_n's after lines 8-12, M takes S_n's topology once more on a lattice of half the voxel size
+  //! (then a quarter, ...), each time from the first result. That result already has S_n's topology as the
+  //! first lattice sees it, and lies within about one of its voxels of S_n; a sign difference between the
+  //! finer φ_S and φ_M within that distance is either one the first lattice could not see (a tunnel or a
+  //! bridge thinner than its voxel) or alignment error. agree_near_surface keeps the first and removes the
+  //! second, so the finer ConstrainTopology(M, φ_S) resamples M only around S_n's small features, and line 9
+  //! (done on the first lattice) is not repeated. A finer result replaces the first only when its topology
+  //! is S_n's and its mesh quality is no worse. (Redoing lines 8-12 from M after line 7 instead, as
+  //! before, matched as many resurfaced pcow frames with 19 % more new vertices per frame and 30 % more
+  //! memory at one halving, and with two took 3.4 GB instead of 1.8; docs/results.md.)
   void refined_topology_lines(PreparedFrame& frame) {
     const SurfaceMesh& target = frame.surface;
     const Index want_components = connected_components(target);
@@ -146,10 +156,7 @@ struct Tracker::Impl {
     const auto matches = [&] {
       return connected_components(mesh) == want_components && euler_characteristic(mesh) == want_euler;
     };
-    const SurfaceMesh aligned = mesh.clone();
-    const EventList aligned_events = events;
-    const FrameReport aligned_report = report;
-    topology_lines(frame, voxel_size);
+    topology_lines(frame, voxel_size, true, params.topology_tolerance * voxel_size);
     if (matches()) return;
     const QualityStats first = quality_stats(mesh);
     const auto worse = [first](const QualityStats& q) {
@@ -160,17 +167,16 @@ struct Tracker::Impl {
     const FrameReport kept_report = report;
     double h = voxel_size;
     for (int level = 1; level <= params.topology_refinements; ++level) {
-      mesh = aligned.clone();
-      events = aligned_events;
-      report.topology_failures = aligned_report.topology_failures;
-      report.warnings = aligned_report.warnings;
+      mesh = kept.clone();
+      events = kept_events;
+      report.topology_failures = kept_report.topology_failures;
+      report.warnings = kept_report.warnings;
       h *= 0.5;
-      topology_lines(frame, h);
+      topology_lines(frame, h, false, voxel_size);
       ++report.topology_retries;
       if (!matches()) continue;
       // The finer cut leaves smaller triangles for line 12 to coarsen; one more ImproveMesh pass often
-      // still finds work there and removes what would reject this result (resurfaced pcow, capture
-      // profile: topology as the input's in 25 of 40 frames with it, 23 without; docs/results.md).
+      // still finds work there and removes what would reject this result.
       if (worse(quality_stats(mesh))) improve(&events);
       if (worse(quality_stats(mesh))) continue;
       report.topology_level = level;
@@ -216,7 +222,7 @@ struct Tracker::Impl {
     if (!params.topology) {
       if (mesh.n_faces() > 0) improve(&events);  // line 12
     } else if (params.topology_refinements <= 0 || target.n_faces() == 0) {
-      topology_lines(frame, voxel_size);
+      topology_lines(frame, voxel_size, true, params.topology_tolerance * voxel_size);
     } else {
       refined_topology_lines(frame);
     }
