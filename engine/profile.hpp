@@ -32,12 +32,14 @@ struct TrackerParams {
   //! cannot see a droplet thinner than a voxel, so without this M loses it. 0 is the paper's rule (nothing
   //! matched).
   double small_component_voxels = 8;
-  //! When M's number of components or Euler characteristic differs from S_n's after lines 8-12, redo those
-  //! lines from M as it was after line 7 on a lattice of half the voxel size, up to this many times (voxel
-  //! size / 2, / 4, ...). A finer result is kept only when its topology is S_n's and it has no more folds
-  //! (dihedral below 45°) or triangles below 2° than the first; otherwise the first stays. The lattice
-  //! cannot see a tunnel or a bridge thinner than a voxel; refining everywhere costs 8x the cells per
-  //! halving on every frame, this only on the frames that need it. 0 is the paper's rule (one lattice).
+  //! When M's number of components or Euler characteristic differs from S_n's after lines 8-12, give that
+  //! result S_n's topology once more on a lattice of half the voxel size (φ_S taking φ_M's sign wherever the
+  //! two surfaces pass within one voxel of the first lattice and the flip keeps φ_S's topology, then lines
+  //! 11-12), up to this many times (voxel size / 2, / 4, ...), each from the first result. A finer result is
+  //! kept only when its topology is S_n's and it has no more folds (dihedral below 45°) or triangles below
+  //! 2° than the first; otherwise the first stays. The lattice cannot see a tunnel or a bridge thinner than
+  //! a voxel; refining everywhere costs 8x the cells per halving on every frame, this only on the frames
+  //! that need it. 0 is the paper's rule (one lattice).
   int topology_refinements = 0;
   //! Lattice nodes closer than this (in voxels) to the surface get the exact sign of the mesh (OpenVDB's
   //! can be wrong at concave creases, which made ConstrainTopology(M, φ_M) resample clean regions).
