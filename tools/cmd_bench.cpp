@@ -12,6 +12,7 @@
 
 #include "engine/frame_loader.hpp"
 #include "engine/tracker.hpp"
+#include "kernels/raycast/embree_scene.hpp"
 #include "io/atomic_file.hpp"
 #include "io/error.hpp"
 #include "io/sequence.hpp"
@@ -109,7 +110,7 @@ void run_bench(const BenchOptions& opt) {
                       {"Splash", {{"vertices", "280k-380k"}, {"frame_time", "105-220s"}, {"coarse", "81-89%"}, {"fine", "11-18%"}}},
                       {"Morph", {{"vertices", "77k-96k"}, {"frame_time", "17-21s"}, {"coarse", "67-73%"}, {"fine", "19-23%"}}},
                       {"PerfCap", {{"vertices", "214k-369k"}, {"frame_time", "150-174s"}, {"coarse", "70-73%"}, {"fine", "24-27%"}}}};
-  const json result = {{"threads", opt.threads}, {"profile", opt.profile}, {"frames_tracked", opt.frames},
+  const json result = {{"threads", opt.threads}, {"embree_isa", embree_isa()}, {"profile", opt.profile}, {"frames_tracked", opt.frames},
                        {"rows", rows}, {"paper_table1", paper}};
   write_file_atomic(out / "table1.json", result.dump(1) + "\n");
 

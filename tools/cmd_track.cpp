@@ -22,6 +22,7 @@
 #include "io/mapped_file.hpp"
 #include "io/ply_writer.hpp"
 #include "kernels/mesh/mesh_convert.hpp"
+#include "kernels/raycast/embree_scene.hpp"
 #include "tools/cli_common.hpp"
 #include "tools/commands.hpp"
 #include "tools/progress.hpp"
@@ -251,6 +252,7 @@ void run_track(TrackOptions opt) {
             {"profile", opt.profile},
             {"parameters", params_json},
             {"threads", opt.threads},
+            {"embree_isa", embree_isa()},
             {"every", opt.every},
             {"frames", nlohmann::json::array()}};
   std::size_t start = 0;
@@ -270,6 +272,10 @@ void run_track(TrackOptions opt) {
         frames[std::size_t(c.frame_index)].number != c.frame_number)
       TT_THROW(InvalidInput, checkpoint_path.string() << ": frame " << c.frame_number
                                                       << " is not in this input sequence");
+    if (old.value("embree_isa", std::string(embree_isa())) != embree_isa())
+      progress.message("warning: " + json_path.string() + ": the interrupted run used Embree's " +
+                       old.value("embree_isa", std::string()) + " kernels, this one " + embree_isa() +
+                       ": the frames from here on can differ slightly from an uninterrupted run's");
     start = std::size_t(c.frame_index) + 1;
     for (const auto& f : old["frames"])
       if (f.value("index", std::size_t(0)) < start) report["frames"].push_back(f);

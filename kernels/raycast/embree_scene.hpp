@@ -15,6 +15,11 @@ namespace topotrack {
 //! repeat per frame. Thread-safe. \throw Error when Embree cannot create it.
 RTCDevice embree_device();
 
+//! The Embree kernels that device runs: "avx2" where the CPU has AVX2, else "sse4.2" ("native", Embree's own
+//! choice, only off x86 or if neither can be set). Pinned, because Embree's kernels for different instruction sets
+//! round differently: output is bit-identical across machines that run the same kernels.
+const char* embree_isa();
+
 //! A ray from `origin` along `direction` (not normalised: t counts in its lengths) over t in [0, tfar], in
 //! Embree's float layout, with no hit recorded yet: what rtcIntersect1 takes.
 inline RTCRayHit embree_ray(const Vec3& origin, const Vec3& direction, float tfar) {

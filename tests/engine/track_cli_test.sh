@@ -83,6 +83,14 @@ set +e
 "$BIN" track "$W/in" -o "$W/c" --resume --set coarse.alpha_reg_start=10 --quiet 2>"$W/err"; code=$?
 set -e
 [ "$code" -eq 2 ] || fail "resume with changed parameters: exit $code, expected 2"
+# track.json names Embree's kernels; resuming a run made with other kernels says its output can differ.
+grep -q '"embree_isa": "[a-z0-9.]*"' "$W/c/track.json" || fail "track.json: embree_isa missing"
+sed -i 's/"embree_isa": "[a-z0-9.]*"/"embree_isa": "elsewhere"/' "$W/c/track.json"
+"$BIN" track "$W/in" -o "$W/c" --resume --progress lines 2>"$W/err" >/dev/null || { cat "$W/err"; fail "resume"; }
+grep -q "warning: .*track.json: the interrupted run used Embree's elsewhere kernels" "$W/err" ||
+  { cat "$W/err"; fail "resume after other Embree kernels: no warning"; }
+same "$W/a" "$W/c"
+echo "ok: track.json names Embree's kernels; resuming another machine's run warns"
 
 expect() {  # expect CODE PATTERN -- command...
   local want=$1 pattern=$2; shift 3

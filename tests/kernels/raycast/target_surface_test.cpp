@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdint>
 #include <limits>
 
 #include "kernels/raycast/embree_scene.hpp"
@@ -146,4 +147,47 @@ TEST(TargetSurface, InvalidInputThrows) {
 }
 
 }  // namespace
+// Embree's kernels for different instruction sets answer differently, so embree_device() pins one. A fixed set
+// of queries on a bumpy sphere must give bit for bit what it gives on the project's machine with the AVX2
+// kernels (with the SSE4.2 kernels the hash differs there: a machine where Embree picked its own would fail).
+TEST(EmbreeScene, PinsTheKernelsSoHitsAreTheSameOnEveryMachine) {
+  const bool avx2 = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma") &&
+                    __builtin_cpu_supports("bmi") && __builtin_cpu_supports("bmi2");
+  EXPECT_STREQ(embree_isa(), avx2 ? "avx2" : "sse4.2");
+  test::Soup s = test::icosphere(6);
+  test::jitter(s, 0.004, 7);
+  const TargetSurface t(s.positions, s.triangles);
+  std::vector<Vec3> origins, directions;
+  for (int i = 0; i < 40000; ++i) {
+    // A golden-angle spiral just off the surface, rays along a skewed radial direction.
+    const double z = 1 - 2 * (i + 0.5) / 40000, r = std::sqrt(1 - z * z), a = 2.399963229728653 * i;
+    const Vec3 p(r * std::cos(a), r * std::sin(a), z);
+    origins.push_back(p * (1 + 0.01 * std::sin(7.0 * i)));
+    directions.push_back(p + 0.3 * Vec3(std::sin(3.0 * i), std::cos(5.0 * i), std::sin(11.0 * i)));
+  }
+  // Queries whose answer is a vertex of the mesh, where the face reported (from the several that meet there)
+  // depends on the order the kernels visit them in.
+  for (std::size_t v = 0; v < s.positions.size(); v += 3) {
+    origins.push_back(1.02 * s.positions[v]);
+    directions.push_back(-s.positions[v]);
+  }
+  std::uint64_t hash = 1469598103934665603ull;  // FNV-1a over every field of every hit
+  auto mix = [&hash](const void* bytes, std::size_t n) {
+    for (std::size_t k = 0; k < n; ++k) hash = (hash ^ static_cast<const unsigned char*>(bytes)[k]) * 1099511628211ull;
+  };
+  auto add = [&mix](const std::vector<TargetSurface::Hit>& hits) {
+    for (const TargetSurface::Hit& h : hits) {
+      mix(&h.hit, sizeof h.hit);
+      mix(&h.face, sizeof h.face);
+      mix(&h.distance, sizeof h.distance);
+      mix(h.point.data(), 3 * sizeof(double));
+    }
+  };
+  add(t.cast_undirected(origins, directions, 0.5));
+  add(t.closest_points(origins));
+  if (avx2) {
+    EXPECT_EQ(hash, 0x4dbf21c41373869aull);  // the SSE4.2 kernels: 0x8e8687472080428a
+  }
+}
+
 }  // namespace topotrack
