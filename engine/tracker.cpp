@@ -178,7 +178,10 @@ struct Tracker::Impl {
       // The finer cut leaves smaller triangles for line 12 to coarsen; one more ImproveMesh pass often
       // still finds work there and removes what would reject this result.
       if (worse(quality_stats(mesh))) improve(&events);
-      if (worse(quality_stats(mesh))) continue;
+      if (worse(quality_stats(mesh))) {
+        ++report.topology_rejected_for_quality;
+        continue;
+      }
       report.topology_level = level;
       return;
     }
@@ -187,10 +190,11 @@ struct Tracker::Impl {
     mesh = std::move(kept);
     events = std::move(kept_events);
     const StageSeconds seconds = report.seconds;
-    const int retries = report.topology_retries;
+    const int retries = report.topology_retries, rejected = report.topology_rejected_for_quality;
     report = kept_report;
     report.seconds = seconds;
     report.topology_retries = retries;
+    report.topology_rejected_for_quality = rejected;
   }
 
   void next_frame(PreparedFrame& frame) {

@@ -56,8 +56,9 @@ struct FrameReport {
   //! Components below the lattice's resolution that M took from S_n or dropped (engine/small_components.hpp).
   std::size_t small_components_added = 0, small_components_removed = 0;
   //! TrackerParams::topology_refinements: lattices tried after the first because M's topology was not
-  //! S_n's, and how many times the voxel size of the one kept was halved (0: the first lattice's result).
-  int topology_retries = 0, topology_level = 0;
+  //! S_n's, and how many times the voxel size of the one kept was halved (0: the first lattice's result);
+  //! of the retries, those that had S_n's topology but were not kept for their mesh quality.
+  int topology_retries = 0, topology_level = 0, topology_rejected_for_quality = 0;
   std::vector<std::string> warnings;
   StageSeconds seconds;
 };

@@ -318,6 +318,7 @@ TEST(Tracker, KeepsTheFirstResultWhenNoFinerLatticeMatches) {
   EXPECT_EQ(refined.report().components, 1u);
   EXPECT_EQ(refined.report().topology_retries, 1);
   EXPECT_EQ(refined.report().topology_level, 0);
+  EXPECT_EQ(refined.report().topology_rejected_for_quality, 0) << "rejected for its topology";
   EXPECT_EQ(a.meshes, b.meshes);
   EXPECT_EQ(a.events, b.events);
   EXPECT_EQ(refined.report().complex_cells_target, plain.report().complex_cells_target);
