@@ -79,7 +79,7 @@ struct Flip {
 
 }  // namespace
 
-void agree_near_surface(openvdb::FloatGrid& phi_s, const openvdb::FloatGrid& phi_m, double tolerance) {
+void agree_near_surface(openvdb::FloatGrid& phi_s, const openvdb::FloatGrid& phi_m, double tolerance, int sweeps) {
   using Leaf = openvdb::FloatTree::LeafNodeType;
   const float tol = float(tolerance);
   openvdb::tree::LeafManager<openvdb::FloatTree> leaves(phi_s.tree());
@@ -98,24 +98,34 @@ void agree_near_surface(openvdb::FloatGrid& phi_s, const openvdb::FloatGrid& phi
       found[n][(c.x() & 1) | (c.y() & 1) << 1 | (c.z() & 1) << 2].push_back({c, m});
     }
   });
-  for (int parity = 0; parity < 8; ++parity) {
-    std::vector<Flip> candidates;
+  std::array<std::vector<Flip>, 8> classes;
+  for (int parity = 0; parity < 8; ++parity)
     for (const auto& per_leaf : found)
-      candidates.insert(candidates.end(), per_leaf[parity].begin(), per_leaf[parity].end());
-    std::vector<std::uint8_t> take(candidates.size(), 0);
-    const openvdb::FloatGrid& s_grid = phi_s;
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, candidates.size(), 256), [&](const auto& r) {
-      auto acc = s_grid.getConstAccessor();
-      for (std::size_t i = r.begin(); i != r.end(); ++i) {
-        Block inside;
-        for (int a = 0; a < 27; ++a)
-          inside[a] = acc.getValue(candidates[i].coord.offsetBy(a % 3 - 1, a / 3 % 3 - 1, a / 9 - 1)) < 0;
-        take[i] = simple_node(inside);
+      classes[parity].insert(classes[parity].end(), per_leaf[parity].begin(), per_leaf[parity].end());
+  const openvdb::FloatGrid& s_grid = phi_s;
+  bool flipped = true;
+  for (int pass = 0; flipped && (sweeps <= 0 || pass < sweeps); ++pass) {
+    flipped = false;
+    for (std::vector<Flip>& candidates : classes) {
+      std::vector<std::uint8_t> take(candidates.size(), 0);
+      tbb::parallel_for(tbb::blocked_range<std::size_t>(0, candidates.size(), 256), [&](const auto& r) {
+        auto acc = s_grid.getConstAccessor();
+        for (std::size_t i = r.begin(); i != r.end(); ++i) {
+          Block inside;
+          for (int a = 0; a < 27; ++a)
+            inside[a] = acc.getValue(candidates[i].coord.offsetBy(a % 3 - 1, a / 3 % 3 - 1, a / 9 - 1)) < 0;
+          take[i] = simple_node(inside);
+        }
+      });
+      auto acc = phi_s.getAccessor();
+      std::size_t kept = 0;
+      for (std::size_t i = 0; i < candidates.size(); ++i) {
+        if (take[i]) acc.setValueOnly(candidates[i].coord, candidates[i].value);
+        else candidates[kept++] = candidates[i];
       }
-    });
-    auto acc = phi_s.getAccessor();
-    for (std::size_t i = 0; i < candidates.size(); ++i)
-      if (take[i]) acc.setValueOnly(candidates[i].coord, candidates[i].value);
+      flipped = flipped || kept < candidates.size();
+      candidates.resize(kept);
+    }
   }
 }
 

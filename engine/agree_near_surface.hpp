@@ -15,6 +15,11 @@ namespace topotrack {
 //! that made a crumb of 4-16 vertices out of a thin part kept 4 of 40 frames from the input's number of
 //! components). Candidates are found per leaf node in parallel and decided in 8 parity classes (nodes of a
 //! class lie outside each other's 3×3×3 neighbourhoods), so the result is one fixed sequential order's.
-void agree_near_surface(openvdb::FloatGrid& phi_s, const openvdb::FloatGrid& phi_m, double tolerance);
+//! `sweeps` passes over the candidates (0: until a pass flips nothing). Where S and M are several nodes
+//! apart (a tolerance of several voxels, as on the tracker's finer lattices), a node between them becomes
+//! simple only once the nodes nearer M's side have flipped, about one layer per pass; within half a voxel
+//! (the tracker's first lattice) one pass is the rule whose output the figures of the default profile are.
+void agree_near_surface(openvdb::FloatGrid& phi_s, const openvdb::FloatGrid& phi_m, double tolerance,
+                        int sweeps = 0);
 
 }  // namespace topotrack

@@ -121,7 +121,8 @@ struct Tracker::Impl {
     else phi_s = distance(target, h);
     if (phi_m && agree_within > 0) {
       const auto t0 = Clock::now();
-      agree_near_surface(*phi_s, *phi_m, agree_within);
+      // On a finer lattice S and M can be several of its nodes apart: flip until nothing more is simple.
+      agree_near_surface(*phi_s, *phi_m, agree_within, self ? 1 : 0);
       report.seconds.topology += since(t0);
     }
     report.complex_cells_target = constrain(*phi_s, report.complex_reasons_target);  // line 11

@@ -46,6 +46,20 @@ TEST(AgreeNearSurface, AlignedSurfacesTakeMsSignsNearBoth) {
     }
 }
 
+TEST(AgreeNearSurface, ASlabSeveralNodesThickFlipsWhole) {
+  // Planes five voxels apart (a finer lattice's view of M and S one coarse voxel apart): the nodes between
+  // them are simple only once those nearer M's side have flipped, and all of them flip.
+  auto s = field([](const openvdb::Coord& c) { return (float(c.z()) - 2.5f) * kVoxel; });
+  const auto m = field([](const openvdb::Coord& c) { return (float(c.z()) + 2.5f) * kVoxel; });
+  agree_near_surface(*s, *m, 5 * kVoxel);
+  for (int x = -4; x <= 4; ++x)
+    for (int y = -4; y <= 4; ++y)
+      for (int z = -4; z <= 4; ++z) {
+        const float want = z >= -2 && z <= 2 ? (float(z) + 2.5f) * kVoxel : (float(z) - 2.5f) * kVoxel;
+        EXPECT_FLOAT_EQ(at(*s, x, y, z), want) << x << " " << y << " " << z;
+      }
+}
+
 TEST(AgreeNearSurface, IsolatedNodesOfMStayADifference) {
   // φ_S is outside (but near its surface) everywhere; φ_M has a one-node and a two-node crumb inside.
   const auto outside = [](const openvdb::Coord&) { return 0.4f * kVoxel; };
