@@ -17,8 +17,9 @@ namespace topotrack {
 //! class lie outside each other's 3×3×3 neighbourhoods), so the result is one fixed sequential order's.
 //! `sweeps` passes over the candidates (0: until a pass flips nothing). Where S and M are several nodes
 //! apart (a tolerance of several voxels, as on the tracker's finer lattices), a node between them becomes
-//! simple only once the nodes nearer M's side have flipped, about one layer per pass; within half a voxel
-//! (the tracker's first lattice) one pass is the rule whose output the figures of the default profile are.
+//! simple only once the nodes nearer M's side have flipped, about one layer per pass. The tracker's first
+//! lattice (half a voxel) keeps one pass: sweeping there too gave resurfaced pcow with the default profile
+//! another trajectory, with a fold in one frame (docs/results.md).
 void agree_near_surface(openvdb::FloatGrid& phi_s, const openvdb::FloatGrid& phi_m, double tolerance,
                         int sweeps = 0);
 

@@ -17,7 +17,7 @@ RTCDevice embree_device();
 
 //! The Embree kernels that device runs: "avx2" where the CPU has AVX2, else "sse4.2" ("native", Embree's own
 //! choice, only off x86 or if neither can be set). Pinned, because Embree's kernels for different instruction sets
-//! round differently: output is bit-identical across machines that run the same kernels.
+//! answer differently: output is bit-identical across machines that run the same kernels.
 const char* embree_isa();
 
 //! A ray from `origin` along `direction` (not normalised: t counts in its lengths) over t in [0, tfar], in
