@@ -147,8 +147,8 @@ struct Tracker::Impl {
   //! bridge thinner than its voxel) or alignment error. agree_near_surface keeps the first and removes the
   //! second, so the finer ConstrainTopology(M, φ_S) resamples M only around S_n's small features, and line 9
   //! (done on the first lattice) is not repeated. A finer result replaces the first only when its topology
-  //! is S_n's and its mesh quality is no worse. (Redoing lines 8-12 from M after line 7 instead, as
-  //! before, matched as many resurfaced pcow frames, 25 of 40, with 19.5 % new vertices per frame instead
+  //! is S_n's and its mesh quality is no worse. (Redoing lines 8-12 from M after line 7 instead matched as
+  //! many resurfaced pcow frames at commit 6f1b969, 25 of 40, with 19.5 % new vertices per frame instead
   //! of 16.7 %, 1.4x the time per frame and 1.17x the peak memory; docs/results.md.)
   void refined_topology_lines(PreparedFrame& frame) {
     const SurfaceMesh& target = frame.surface;
