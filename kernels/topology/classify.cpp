@@ -14,6 +14,7 @@
 #include "kernels/mesh/radix_sort.hpp"
 #include "kernels/sdf/cube_table.hpp"
 #include "kernels/topology/classify_fast.hpp"
+#include "kernels/topology/simple_point.hpp"
 
 namespace topotrack::topology {
 namespace {
@@ -368,7 +369,7 @@ HugeVector<CellPiece> pieces_by_cell(const LatticeCut& cut) {
 
 }  // namespace
 
-CellIndex index_cells(const LatticeCut& cut, const openvdb::FloatGrid& theta) {
+CellIndex index_cells(const LatticeCut& cut, const openvdb::FloatGrid& theta, bool flips_keep_topology) {
   CellIndex idx;
   const std::size_t np = cut.pieces.size();
   const HugeVector<CellPiece> by_cell = pieces_by_cell(cut);
@@ -377,22 +378,45 @@ CellIndex index_cells(const LatticeCut& cut, const openvdb::FloatGrid& theta) {
   std::vector<const openvdb::FloatTree::LeafNodeType*> leaves;
   theta.tree().getNodes(leaves);
   std::vector<std::vector<std::uint64_t>> leaf_cells(leaves.size()), leaf_near(leaves.size());
-  const float limit = float(1.8 * theta.voxelSize()[0]), tol = float(kSignTolerance * theta.voxelSize()[0]);
+  const float tol = float(kSignTolerance * theta.voxelSize()[0]);
   const CellIndex raw;
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, leaves.size(), 16), [&](const tbb::blocked_range<std::size_t>& r) {
     auto acc = theta.getConstAccessor();
     // Offsets of the eight corners of a cell within a leaf (x * 64 + y * 8 + z), in corner order.
     constexpr int kCornerOffset[8] = {0, 64, 8, 72, 1, 65, 9, 73};
+    // A cell whose minimum corner is inactive is not visited below, yet it can change sign: Θ need not be a
+    // distance (the tracker's agree_near_surface gives nodes of φ_S φ_M's value, up to several voxels from
+    // their neighbours' distances). Left out, such a cell counts as simple without ever being examined, and
+    // the replacement next to it fails for want of M's crossing on its lattice edge (the complex region
+    // then grows by whole layers). So every lattice edge with an active end whose ends differ in sign adds
+    // the cells around it that have an inactive minimum corner.
+    // `leaf`, `off`: a's leaf and offset in it when a is in the leaf being visited (its nodes' activity is read
+    // from the leaf's mask, which is most of them), else null.
+    constexpr int kStride[3] = {64, 8, 1};
+    auto add_cells_around = [&](std::vector<std::uint64_t>& out, openvdb::Coord a, int L,
+                                const openvdb::FloatTree::LeafNodeType* leaf, openvdb::Index off) {
+      const int ua = L == 0 ? 1 : 0, va = L == 2 ? 1 : 2;
+      const openvdb::Coord local = leaf ? a - leaf->origin() : openvdb::Coord();
+      for (int d = 1; d < 4; ++d) {  // d = 0 is the cell with minimum corner a
+        openvdb::Coord p = a;
+        p[ua] -= d & 1;
+        p[va] -= d >> 1;
+        const bool in_leaf = leaf && local[ua] >= (d & 1) && local[va] >= (d >> 1);
+        const bool on = in_leaf ? leaf->isValueOn(off - (d & 1) * kStride[ua] - (d >> 1) * kStride[va])
+                                : acc.isValueOn(p);
+        if (!on) out.push_back(cell_key(p));
+      }
+      if (!leaf && !acc.isValueOn(a)) out.push_back(cell_key(a));
+    };
     for (std::size_t l = r.begin(); l != r.end(); ++l) {
       const float* buf = leaves[l]->buffer().data();
       for (auto it = leaves[l]->cbeginValueOn(); it; ++it) {
-        // A corner value beyond the cell diagonal means no sign change in the cell (Θ is a distance).
-        if (std::abs(*it) > limit) continue;
         const openvdb::Coord c = it.getCoord();
         bool in_range = true;
         for (int a = 0; a < 3; ++a) in_range = in_range && std::abs(c[a]) < kCellRange - 4;
         if (!in_range) continue;
-        if (std::abs(*it) < tol) leaf_near[l].push_back(cell_key(c));
+        const float v = *it;
+        if (std::abs(v) < tol) leaf_near[l].push_back(cell_key(c));
         // The cell's corners from the leaf's own buffer when they are all in it (getValue reads the same).
         const auto off = it.pos();
         std::uint8_t m = 0;
@@ -403,6 +427,19 @@ CellIndex index_cells(const LatticeCut& cut, const openvdb::FloatGrid& theta) {
           m = theta_mask(acc, raw, c);
         }
         if (m != 0 && m != 255) leaf_cells[l].push_back(cell_key(c));
+        // Corners 1, 2 and 4 are the neighbours along x, y and z: the edges upwards from c.
+        const bool in = v < 0.f;
+        for (int L = 0; L < 3; ++L) {
+          if (bool(m & (1u << (1 << L))) != in) add_cells_around(leaf_cells[l], c, L, leaves[l], off);
+          // The node below along L: from the leaf itself when it is in it (most are).
+          const int local = L == 0 ? int(off >> 6) : L == 1 ? int((off >> 3) & 7) : int(off & 7);
+          openvdb::Coord below = c;
+          below[L] -= 1;
+          const bool on = local > 0 ? leaves[l]->isValueOn(off - kStride[L]) : acc.isValueOn(below);
+          if (on) continue;
+          const float vb = local > 0 ? buf[off - kStride[L]] : acc.getValue(below);
+          if ((vb < 0.f) != in) add_cells_around(leaf_cells[l], below, L, nullptr, 0);
+        }
       }
     }
   });
@@ -419,11 +456,33 @@ CellIndex index_cells(const LatticeCut& cut, const openvdb::FloatGrid& theta) {
       flip[i] = resolve_node_sign(acc, n, tol, inside, crossings.data() + 6 * i) != inside;
     }
   });
+  // Only flips that keep Θ's topology (simple_point.hpp), taken in key order so the result does not depend
+  // on the thread count: a node within kSignTolerance of a thin gap or a thin sheet of Θ, where M still
+  // runs across (M has not split yet), would otherwise take M's side, close the gap, and keep M from taking
+  // Θ's topology (resurfaced pcow, capture profile, the first 28 frames: in 31 of 56 calls of
+  // ConstrainTopology(M, φ_S) M came out with another topology than φ_S's marching-cubes surface that way;
+  // in none since). A flip left out leaves the cells around the node complex, and M is resampled there.
+  // There are a few hundred candidates a call: sequential is simplest.
+  {
+    auto acc = theta.getConstAccessor();
+    for (std::size_t i = 0; i < near.size(); ++i) {
+      if (!flip[i]) continue;
+      const openvdb::Coord n = cell_from_key(near[i]);
+      NodeBlock inside;
+      for (int a = 0; a < 27; ++a) {
+        const openvdb::Coord q = n.offsetBy(a % 3 - 1, a / 3 % 3 - 1, a / 9 - 1);
+        // idx.flipped holds the flips taken so far, in key order: sorted.
+        const bool flipped = std::binary_search(idx.flipped.begin(), idx.flipped.end(), cell_key(q));
+        inside[a] = (acc.getValue(q) < 0.f) != flipped;
+      }
+      if (!flips_keep_topology || simple_node(inside)) idx.flipped.push_back(near[i]);
+      else flip[i] = 0;
+    }
+  }
   std::vector<std::uint64_t> sign_cells;
   for (const auto& v : leaf_cells) sign_cells.insert(sign_cells.end(), v.begin(), v.end());
   for (std::size_t i = 0; i < near.size(); ++i) {
     if (!flip[i]) continue;
-    idx.flipped.push_back(near[i]);
     const openvdb::Coord n = cell_from_key(near[i]);
     for (int d = 0; d < 8; ++d) sign_cells.push_back(cell_key(n.offsetBy(-(d & 1), -((d >> 1) & 1), -((d >> 2) & 1))));
   }

@@ -44,14 +44,17 @@ struct CellIndex {
 //! vertices by a few hundredths of a voxel. Such a node takes the sign that its lattice-edge neighbours
 //! farther from the zero set imply through the parity of M's crossings of the edge between them, when they
 //! all agree; otherwise Θ's sign. For Θ = φ_M this is M's own side; for Θ = φ_S it moves S's zero set by at
-//! most this much towards M (the tracker's topology_tolerance already allows 0.5 voxel).
+//! most this much towards M (the tracker's topology_tolerance already allows 0.5 voxel). With
+//! `flips_keep_topology` (index_cells) only flips that keep Θ's topology are taken (simple points,
+//! simple_point.hpp): across a gap or a sheet of Θ that close to a node, M's side is Θ's topology lost.
 inline constexpr double kSignTolerance = 0.1;
 
 //! Group the pieces by cell, decide the signs of the nodes within kSignTolerance of Θ's zero set, and add
 //! the cells where Θ (with those signs) changes sign. The sign-change cells are found in parallel over Θ's
-//! leaf nodes (a cell is visited from its minimum corner, which must be active: true for any level set
-//! whose band is at least 2 voxels wide on each side).
-CellIndex index_cells(const LatticeCut& cut, const openvdb::FloatGrid& theta);
+//! leaf nodes: from their minimum corner when it is active, else from a lattice edge with an active end
+//! along which Θ changes sign. Θ need not be a distance; only a sign change between two inactive nodes (a
+//! band broken through) goes unseen.
+CellIndex index_cells(const LatticeCut& cut, const openvdb::FloatGrid& theta, bool flips_keep_topology = true);
 
 //! Θ's value at a lattice node, with the sign decided by index_cells (a flipped zero becomes negative).
 float node_value(const openvdb::FloatGrid::ConstAccessor& acc, const CellIndex& index, const openvdb::Coord& node);

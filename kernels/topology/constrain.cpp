@@ -106,7 +106,7 @@ ConstrainReport constrain_topology(SurfaceMesh& mesh, const openvdb::FloatGrid& 
 
   LatticeCut cut = cut_by_lattice(mesh, xform);
   report.seconds_cut = since(t0);
-  const CellIndex index = index_cells(cut, theta);
+  const CellIndex index = index_cells(cut, theta, params.flips_keep_topology);
   report.seconds_index = since(t0) - report.seconds_cut;
   std::vector<std::uint64_t> region =
       complex_cells(mesh, cut, index, theta, topology::ClassifyPath::kFast, &report.cells_by_verdict);

@@ -27,7 +27,8 @@
 //!     region (absorb_sliver_pieces), and so do the cells of any triangle of the result below
 //!     kMinTriangleArea (absorb_sliver_triangles, up to three rounds; the last valid result is kept).
 //!     Lattice nodes within kSignTolerance of Θ's zero set take the sign M's crossings imply (classify.hpp),
-//!     so that the kSnap push never makes a well-represented cell complex.
+//!     so that the kSnap push never makes a well-represented cell complex, unless that would change Θ's
+//!     topology (ConstrainParams::flips_keep_topology).
 //!  4. Events (§4.4), in this order: the points where the cut subdivides kept triangles (edge splits and
 //!     triangle subdivisions with exact interpolation weights); one PatchDelete per connected patch of
 //!     removed vertices (backward rules by breadth-first march from the kept vertices around it, each
@@ -56,6 +57,11 @@ struct ConstrainParams {
   //! Fill ConstrainReport::components_before/after: a pass over the whole mesh each (about 4 ms at 100k
   //! vertices); the tracker does not need them.
   bool count_components = true;
+  //! Lattice nodes within kSignTolerance of Θ's zero set take the sign M's crossings imply only where that
+  //! keeps Θ's topology (classify.hpp): M then always comes out with the topology of Θ's marching-cubes
+  //! surface. Off, they take it wherever the crossings agree, and across a gap or a sheet of Θ that close
+  //! to a node M keeps its own topology.
+  bool flips_keep_topology = true;
 };
 
 struct ConstrainReport {
@@ -86,7 +92,8 @@ struct ConstrainReport {
 
 //! ConstrainTopology(M, Θ) of §4.3; Θ is a narrow-band level set (negative inside), its voxel lattice the
 //! cells. \pre mesh is a closed, consistently oriented 2-manifold (outward normals); Θ's transform is
-//! linear (any voxel size) and its band is at least 2 voxels wide on each side.
+//! linear (any voxel size) and every lattice edge along which it changes sign has an active end (true of a
+//! distance whose band is wider than the cell diagonal, √3 voxels, on each side; the values need not be distances).
 //! \throw InvalidInput on a non-finite or out-of-range coordinate or a non-linear transform;
 //! TopologyError when the replacement still fails after max_region_growth growths.
 ConstrainReport constrain_topology(SurfaceMesh& mesh, const openvdb::FloatGrid& theta, const ConstrainParams& params = {},

@@ -353,6 +353,71 @@ TEST(ConstrainTopology, SameResultWithABandJustBeyondTheCellDiagonal) {
   EXPECT_GT(complex, 0u);
 }
 
+// Θ need not be a distance: the tracker gives nodes of φ_S the value of φ_M (agree_near_surface), so a node at
+// the band's edge can turn inside while its neighbours beyond the band stay inactive. The cells around it
+// with an inactive minimum corner change sign too and must be examined: before they were, they passed for
+// simple, the replacement next to them found no crossing of M on their lattice edges, and the complex region
+// grew by a whole layer (resurfaced pcow, capture profile: ~30 000 cells replaced on the finer lattice
+// instead of ~3 000).
+TEST(ConstrainTopology, ExaminesSignChangesAtTheBandsEdge) {
+  using namespace topology;
+  SurfaceMesh m = test::icosphere(4).mesh();
+  const double h = 0.05;
+  GridPtr theta = signed_distance(m, h, 1.75);
+  // An outside node near the band's edge whose neighbour below along x is beyond the band.
+  openvdb::Coord node;
+  bool found = false;
+  auto acc = theta->getAccessor();
+  for (auto it = theta->cbeginValueOn(); it && !found; ++it) {
+    const openvdb::Coord c = it.getCoord();
+    found = *it > 1.2 * h && !acc.isValueOn(c.offsetBy(-1, 0, 0)) && acc.isValueOn(c.offsetBy(1, 0, 0));
+    if (found) node = c;
+  }
+  ASSERT_TRUE(found);
+  acc.setValueOnly(node, float(-0.5 * h));  // a speck of Θ's inside, apart from the sphere
+
+  const LatticeCut cut = cut_by_lattice(m, theta->transform());
+  const CellIndex index = index_cells(cut, *theta);
+  const std::vector<std::uint64_t> bad = complex_cells(m, cut, index, *theta);
+  for (int d = 0; d < 8; ++d) {
+    const std::uint64_t k = cell_key(node.offsetBy(-(d & 1), -((d >> 1) & 1), -((d >> 2) & 1)));
+    EXPECT_TRUE(std::binary_search(index.cells.begin(), index.cells.end(), k)) << "cell " << d << " not examined";
+    EXPECT_TRUE(std::binary_search(bad.begin(), bad.end(), k)) << "cell " << d << " not complex";
+  }
+  EventList ev;
+  const ConstrainReport r = constrain_topology(m, *theta, {}, &ev);
+  EXPECT_EQ(r.region_growth, 0);
+  expect_sound(m);
+  EXPECT_EQ(connected_components(m), 2u);
+  expect_topology_of(m, *theta);
+}
+
+// Nodes within kSignTolerance of Θ's zero set take M's side only where that keeps Θ's topology
+// (ConstrainParams::flips_keep_topology, on by default). Θ: two balls
+// a twentieth of a voxel from a lattice node on either side of it; M: one ball across both. M's crossings
+// put that node inside, which would bridge the balls and leave M one component; the flip is not a simple
+// point of Θ's inside, so the node keeps Θ's sign and M splits.
+TEST(ConstrainTopology, SignsTakenFromMKeepThetasTopology) {
+  using namespace topology;
+  const double h = 0.02, R = 20 * h, gap = 0.05 * h;
+  GridPtr theta = unite(sphere(R, {-R - gap, 0, 0}, h), sphere(R, {R + gap, 0, 0}, h));
+  const openvdb::Coord node(0, 0, 0);
+  ASSERT_GT(theta->getConstAccessor().getValue(node), 0.f);
+  ASSERT_LT(theta->getConstAccessor().getValue(node), float(kSignTolerance * h));
+  SurfaceMesh m = test::icosphere(5, 1.2 * R).mesh();
+  ASSERT_EQ(connected_components(m), 1u);
+  {
+    const LatticeCut cut = cut_by_lattice(m, theta->transform());
+    EXPECT_FALSE(index_cells(cut, *theta).is_flipped(node));
+    // Without the topology check (the tracker's first lattice) the node takes M's side.
+    EXPECT_TRUE(index_cells(cut, *theta, false).is_flipped(node));
+  }
+  constrain_topology(m, *theta);
+  expect_sound(m);
+  EXPECT_EQ(connected_components(m), 2u);
+  expect_topology_of(m, *theta);
+}
+
 TEST(ConstrainTopology, CountsComponentsOnlyWhenAsked) {
   SurfaceMesh m = test::icosphere(4, 0.5).mesh();
   const GridPtr two = unite(sphere(0.3, Vec3(-0.4, 0, 0), 0.05), sphere(0.3, Vec3(0.4, 0, 0), 0.05));
@@ -441,7 +506,8 @@ TEST(ConstrainTopology, RealSequenceFrames) {
   expect_sound(m);
   const GridPtr phi_s = signed_distance(target, h);
   // Two of the target's small components (inside the head, where the capture crosses itself) are 0.34 voxel
-  // apart, with lattice nodes between them within 0.03 voxel of φ_S's zero set: they take M's side.
+  // apart, with lattice nodes between them within 0.03 voxel of φ_S's zero set: they take M's side where
+  // that keeps φ_S's topology.
   const GridPtr decided = as_decided(m, *phi_s);
   constrain_topology(m, *phi_s);
   expect_sound(m);
