@@ -1,6 +1,7 @@
 #include "engine/small_components.hpp"
 
 #include <algorithm>
+#include <limits>
 #include <numeric>
 #include <optional>
 
@@ -166,6 +167,56 @@ bool all_near(const TargetSurface* surface, std::span<const Vec3> pos, const std
   return surface && std::all_of(vs.begin(), vs.end(), [&](Index v) { return surface->closest_point(pos[v], radius).hit; });
 }
 
+//! Whether the small closed surface (`pos`, `tris`) lies apart from M's `rest`: no edge of either crosses a
+//! triangle of the other (two closed triangle meshes that intersect always have such an edge), and it is not
+//! inside M (the first surface of M that a ray from it meets faces away from the ray).
+bool lies_apart(const Part& rest, std::span<const Vec3> pos, const Soup& tris) {
+  const TargetSurface& m = *rest.scene();
+  BoundingBox box;
+  for (const auto& t : tris)
+    for (int k = 0; k < 3; ++k) {
+      const Vec3 &a = pos[t[k]], &b = pos[t[(k + 1) % 3]];
+      if (m.cast(a, b - a, (b - a).norm()).hit) return false;
+      box.extend(a);
+    }
+  const TargetSurface piece(pos, tris);
+  for (const auto& t : rest.tris) {
+    BoundingBox tb;
+    for (Index v : t) tb.extend(rest.pos[v]);
+    if ((tb.min.array() > box.max.array()).any() || (tb.max.array() < box.min.array()).any()) continue;
+    for (int k = 0; k < 3; ++k) {
+      const Vec3 &a = rest.pos[t[k]], &b = rest.pos[t[(k + 1) % 3]];
+      if (piece.cast(a, b - a, (b - a).norm()).hit) return false;
+    }
+  }
+  const Vec3 dir = Vec3(1, 2, 3).normalized();  // any fixed direction: M is closed and oriented outwards
+  const TargetSurface::Hit h = m.cast(pos[tris[0][0]], dir, std::numeric_limits<double>::infinity());
+  return !h.hit || h.normal.dot(dir) < 0;
+}
+
+//! A component of S that comes within `radius` of M is still copied when its copy can lie apart from M, where
+//! it is or moved straight away from M by a quarter, a half, three quarters or all of `max_shift` (the
+//! tracker: one voxel). Resurfaced captures leave crumbs a hair's breadth from a larger part (samba frame 20:
+//! 0.07 voxels away), which no lattice sees apart from that part and which the rule "no part of M within
+//! `radius`" alone never copies. Moves `pos` to the place found; false when none is apart.
+bool place_apart(const Part& rest, std::vector<Vec3>& pos, const Soup& tris, double max_shift) {
+  Vec3 c = Vec3::Zero();
+  for (const Vec3& p : pos) c += p;
+  c /= double(pos.size());
+  const TargetSurface::Hit h = rest.scene()->closest_point(c);
+  Vec3 away = c - h.point;
+  away = away.norm() > 0 ? Vec3(away.normalized()) : h.normal;
+  std::vector<Vec3> moved(pos.size());
+  for (int k = 0; k <= 4; ++k) {
+    for (std::size_t i = 0; i < pos.size(); ++i) moved[i] = pos[i] + (0.25 * k * max_shift) * away;
+    if (lies_apart(rest, moved, tris)) {
+      pos = std::move(moved);
+      return true;
+    }
+  }
+  return false;
+}
+
 }  // namespace
 
 SmallComponentReport match_small_components(SurfaceMesh& mesh, const TargetSurface& target, double radius,
@@ -230,7 +281,8 @@ SmallComponentReport match_small_components(SurfaceMesh& mesh, const TargetSurfa
     ++report.removed;
   }
 
-  // A small component of S that no part of M comes within `radius` of is copied in, with fresh ids.
+  // A small component of S that no part of M comes within `radius` of is copied in, with fresh ids; one that
+  // comes that near only if its copy can lie apart from M (place_apart).
   const std::span<const Vec3> s_pos = target.positions();
   VertexId next = mesh.next_id();
   std::vector<Vec3> out_pos = rest.pos;
@@ -249,17 +301,22 @@ SmallComponentReport match_small_components(SurfaceMesh& mesh, const TargetSurfa
   }
   for (std::size_t c : candidates) {
     const std::vector<Index>& vs = s_small.vertices[c];
-    if (any_near(rest.scene(), s_pos, vs, radius)) continue;
-    const std::size_t first = out_pos.size();
+    std::vector<Vec3> piece_pos;
+    Soup piece_tris;
     if (!copied_as_is[c]) {
-      append_octahedron(s_pos, vs, out_pos, out_tris);
+      append_octahedron(s_pos, vs, piece_pos, piece_tris);
     } else {
       for (Index v : vs) {
-        copy[v] = Index(out_pos.size());
-        out_pos.push_back(s_pos[v]);
+        copy[v] = Index(piece_pos.size());
+        piece_pos.push_back(s_pos[v]);
       }
-      for (const auto& t : candidate_tris[c]) out_tris.push_back({copy[t[0]], copy[t[1]], copy[t[2]]});
+      for (const auto& t : candidate_tris[c]) piece_tris.push_back({copy[t[0]], copy[t[1]], copy[t[2]]});
     }
+    if (any_near(rest.scene(), s_pos, vs, radius) && !place_apart(rest, piece_pos, piece_tris, 2 * radius)) continue;
+    const std::size_t first = out_pos.size();
+    out_pos.insert(out_pos.end(), piece_pos.begin(), piece_pos.end());
+    for (const auto& t : piece_tris)
+      out_tris.push_back({Index(first + t[0]), Index(first + t[1]), Index(first + t[2])});
     patch.clear();
     for (std::size_t i = first; i < out_pos.size(); ++i) {
       out_ids.push_back(next);

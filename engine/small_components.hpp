@@ -7,9 +7,11 @@
 //! is farther from its input than a voxel (a 2.5-voxel needle missing from a resurfaced pcow frame is a
 //! Hausdorff distance of 1.85 % of the diagonal). This step makes M follow the input at the component level:
 //! after ConstrainTopology(M, φ_S), every small component of S that no part of M comes near is copied into M (a
-//! PatchCreate event, its new vertices' material from the closest point of M), and every small component of M
-//! that comes near no part of S is removed (a PatchDelete event). Components of either larger than `max_extent`
-//! (bounding-box diagonal) are the lattice's business and are not looked at. A copied component at most 2√2 L
+//! PatchCreate event, its new vertices' material from the closest point of M; one that a part of M comes near
+//! only where its copy, or the copy moved up to twice `radius` away from M, touches no part of M and is not
+//! inside it), and every small component of M that comes near no part of S is removed (a PatchDelete event).
+//! Components of either larger than `max_extent` (bounding-box diagonal) are the lattice's business and are not
+//! looked at. A copied component at most 2√2 L
 //! across (L the target edge length) becomes an octahedron on its principal axes, the best-shaped mesh at that
 //! resolution (ImproveMesh would collapse its triangles to a tetrahedron, often a flat one).
 #include <cstddef>

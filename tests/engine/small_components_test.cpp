@@ -131,6 +131,48 @@ TEST(SmallComponents, LeavesMAloneWhereBothHaveTheComponent) {
   EXPECT_EQ(m.ids(), before.ids());
 }
 
+TEST(SmallComponents, CopiesACrumbBesideALargerPartWhereItLiesApart) {
+  // A flat crumb 0.012 above the sphere's north pole, within `radius` (0.025) of it (the resurfaced samba's
+  // frame 20 has one 0.07 voxels from the body). Its octahedron, thickened to half its width, would cut into
+  // the sphere where the crumb is; moved away from M it lies apart, and M gets the input's components.
+  const test::Soup sphere = test::icosphere(3, 1.0);
+  SurfaceMesh m = sphere.mesh();
+  const SurfaceMesh before = m.clone();
+  const Vec3 c(0, 0, 1.012);
+  const test::Soup both = test::merge(sphere, flat_speck(c, 0.04));
+  const TargetSurface s(both.positions, both.triangles);
+  EventList events;
+  const SmallComponentReport r = match_small_components(m, s, kRadius, kMaxExtent, kEdge, &events);
+  EXPECT_EQ(r.added, 1u);
+  m.validate();
+  EXPECT_EQ(connected_components(m), 2);
+  EXPECT_EQ(euler_characteristic(m), 4);
+  const std::vector<Vertex> added = new_vertices(m, before);
+  ASSERT_EQ(added.size(), 6u);
+  double lowest = 2;
+  for (Vertex v : added) {
+    lowest = std::min(lowest, m.position(v).z());
+    EXPECT_LT((m.position(v) - c).norm(), 0.02 + 2 * kRadius + 1e-9);  // moved by at most 2 radius
+  }
+  // Above the sphere (whose highest point is its pole at 1), not through it.
+  EXPECT_GT(lowest, 1.0);
+  EXPECT_GE(min_dihedral_deg(m), 45.0);
+  ASSERT_EQ(events.size(), 1u);
+  EXPECT_EQ(events.event(0).kind, EventKind::PatchCreate);
+}
+
+TEST(SmallComponents, LeavesACrumbInsideM) {
+  // M's sphere is larger than S's: it covers S's crumb, 0.008 below M's surface. Moving the copy away from M's
+  // closest point takes it deeper in; nothing is copied.
+  const test::Soup sphere = test::icosphere(3, 1.0), bigger = test::icosphere(3, 1.02);
+  SurfaceMesh m = bigger.mesh();
+  const test::Soup both = test::merge(sphere, flat_speck(Vec3(0, 0, 1.012), 0.04));
+  const TargetSurface s(both.positions, both.triangles);
+  const SmallComponentReport r = match_small_components(m, s, kRadius, kMaxExtent, kEdge, nullptr);
+  EXPECT_EQ(r.added, 0u);
+  EXPECT_EQ(connected_components(m), 1);
+}
+
 TEST(SmallComponents, RemovesAComponentSNoLongerHas) {
   const test::Soup sphere = test::icosphere(3, 1.0);
   SurfaceMesh m = test::merge(sphere, test::icosphere(1, 0.05, Vec3(1.5, 0, 0))).mesh();
