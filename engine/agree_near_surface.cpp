@@ -5,7 +5,6 @@
 
 #include <array>
 #include <cmath>
-#include <cstdlib>
 #include <vector>
 
 #include "kernels/topology/simple_point.hpp"

@@ -227,7 +227,8 @@ TEST(RealData, SambaConsecutiveFrames) {
 }
 TEST(RealData, ElephantLargeMotion) {
   TOPOTRACK_REQUIRE_DATA("elephant");
-  // Median 3.09% of 6.25% (one re-sampling at 0.8 before b4100c4: 3.41%; misfit 0.57%: the low-density
+  // Median 3.88% of 6.25% at 78d1eea (3.09% at b4100c4, whose re-sampled targets differ; one re-sampling at
+  // 0.8 before b4100c4: 3.41%; misfit 0.57%: the low-density
   // pass and backward matches at the pruned nodes, no pre-alignment); 4.27% without the backward matches
   // (TOPOTRACK_TEST_BACKWARD_WEIGHT=0;
   // 4.13% before the rotation retraction), 4.02% with them at every node
