@@ -167,10 +167,15 @@ bool all_near(const TargetSurface* surface, std::span<const Vec3> pos, const std
   return surface && std::all_of(vs.begin(), vs.end(), [&](Index v) { return surface->closest_point(pos[v], radius).hit; });
 }
 
+bool boxes_overlap(const BoundingBox& a, const BoundingBox& b) {
+  return !((a.min.array() > b.max.array()).any() || (a.max.array() < b.min.array()).any());
+}
+
 //! Whether the small closed surface (`pos`, `tris`) lies apart from M's `rest`: no edge of either crosses a
 //! triangle of the other (two closed triangle meshes that intersect always have such an edge), and it is not
-//! inside M (the first surface of M that a ray from it meets faces away from the ray).
-bool lies_apart(const Part& rest, std::span<const Vec3> pos, const Soup& tris) {
+//! inside M (the first surface of M that a ray from it meets faces away from the ray). `near`: the triangles
+//! of `rest` whose boxes meet the region the surface may take (only those can be crossed).
+bool lies_apart(const Part& rest, std::span<const Index> near, std::span<const Vec3> pos, const Soup& tris) {
   const TargetSurface& m = *rest.scene();
   BoundingBox box;
   for (const auto& t : tris)
@@ -180,10 +185,11 @@ bool lies_apart(const Part& rest, std::span<const Vec3> pos, const Soup& tris) {
       box.extend(a);
     }
   const TargetSurface piece(pos, tris);
-  for (const auto& t : rest.tris) {
+  for (const Index f : near) {
+    const auto& t = rest.tris[f];
     BoundingBox tb;
     for (Index v : t) tb.extend(rest.pos[v]);
-    if ((tb.min.array() > box.max.array()).any() || (tb.max.array() < box.min.array()).any()) continue;
+    if (!boxes_overlap(tb, box)) continue;
     for (int k = 0; k < 3; ++k) {
       const Vec3 &a = rest.pos[t[k]], &b = rest.pos[t[(k + 1) % 3]];
       if (piece.cast(a, b - a, (b - a).norm()).hit) return false;
@@ -201,15 +207,27 @@ bool lies_apart(const Part& rest, std::span<const Vec3> pos, const Soup& tris) {
 //! `radius`" alone never copies. Moves `pos` to the place found; false when none is apart.
 bool place_apart(const Part& rest, std::vector<Vec3>& pos, const Soup& tris, double max_shift) {
   Vec3 c = Vec3::Zero();
-  for (const Vec3& p : pos) c += p;
+  BoundingBox reach;  // every place tried lies within max_shift of where the copy is
+  for (const Vec3& p : pos) {
+    c += p;
+    reach.extend(p);
+  }
   c /= double(pos.size());
+  reach.min.array() -= max_shift;
+  reach.max.array() += max_shift;
+  std::vector<Index> near;  // one pass over M's triangles per component, not per place
+  for (std::size_t f = 0; f < rest.tris.size(); ++f) {
+    BoundingBox tb;
+    for (Index v : rest.tris[f]) tb.extend(rest.pos[v]);
+    if (boxes_overlap(tb, reach)) near.push_back(Index(f));
+  }
   const TargetSurface::Hit h = rest.scene()->closest_point(c);
   Vec3 away = c - h.point;
   away = away.norm() > 0 ? Vec3(away.normalized()) : h.normal;
   std::vector<Vec3> moved(pos.size());
   for (int k = 0; k <= 4; ++k) {
     for (std::size_t i = 0; i < pos.size(); ++i) moved[i] = pos[i] + (0.25 * k * max_shift) * away;
-    if (lies_apart(rest, moved, tris)) {
+    if (lies_apart(rest, near, moved, tris)) {
       pos = std::move(moved);
       return true;
     }
