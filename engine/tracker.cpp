@@ -20,6 +20,10 @@ namespace {
 using Clock = std::chrono::steady_clock;
 double since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
+// ConstrainParams::max_cut_cells on lattices of a quarter of the first one's voxel and finer: resurfaced pcow
+// (capture profile, two halvings, 40 frames) peaked at 1 086 MB; in one pass 1.73 GB (docs/results.md).
+constexpr double kSlabCells = 4.0e6;
+
 }  // namespace
 
 struct Tracker::Impl {
@@ -46,7 +50,8 @@ struct Tracker::Impl {
 
   //! ConstrainTopology(M, Θ) (§4.3), timed into the topology column. Returns the number of complex cells
   //! and sets `reasons`. `flips_keep_topology`: ConstrainParams::flips_keep_topology.
-  std::size_t constrain(const openvdb::FloatGrid& theta, topology::VerdictCounts& reasons, bool flips_keep_topology) {
+  std::size_t constrain(const openvdb::FloatGrid& theta, double h, topology::VerdictCounts& reasons,
+                        bool flips_keep_topology) {
     const auto t0 = Clock::now();
     // A failed local replacement leaves M as it was (constrain_topology commits only a valid result):
     // the frame goes on without this topology step, and the failure is reported, not hidden.
@@ -56,6 +61,8 @@ struct Tracker::Impl {
       ConstrainParams cp = params.constrain;
       cp.count_components = false;  // not reported per frame
       cp.flips_keep_topology = flips_keep_topology;
+      // From two halvings of the first lattice on, the cut of all of M is most of the memory: in slabs.
+      if (h < 0.3 * voxel_size) cp.max_cut_cells = kSlabCells;
       const ConstrainReport r = constrain_topology(mesh, theta, cp, &ev);
       cells = r.complex_cells;
       reasons = r.cells_by_verdict;
@@ -115,7 +122,7 @@ struct Tracker::Impl {
     openvdb::FloatGrid::Ptr phi_m;
     if (mesh.n_faces() > 0 && (self || agree_within > 0)) {
       phi_m = distance(mesh, h);                                                             // line 8
-      if (self) report.complex_cells_self = constrain(*phi_m, report.complex_reasons_self, false);  // line 9
+      if (self) report.complex_cells_self = constrain(*phi_m, h, report.complex_reasons_self, false);  // line 9
     }
     openvdb::FloatGrid::Ptr phi_s;  // line 10, usually done by prepare
     if (frame.phi && frame.voxel_size == h) phi_s = std::move(frame.phi);
@@ -132,7 +139,8 @@ struct Tracker::Impl {
     // With the check on the first lattice too, resurfaced pcow matched the input's topology in 5 of 40
     // frames with the default profile instead of 7 and samba in 36 instead of 38 (docs/results.md,
     // 2026-11-25).
-    report.complex_cells_target = constrain(*phi_s, report.complex_reasons_target, !self);
+    phi_m.reset();  // not needed any more: its memory is free for the cut
+    report.complex_cells_target = constrain(*phi_s, h, report.complex_reasons_target, !self);
     report.small_components_added = report.small_components_removed = 0;
     if (params.small_component_voxels > 0 && target.n_faces() > 0) {
       const auto t0 = Clock::now();

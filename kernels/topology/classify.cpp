@@ -369,10 +369,18 @@ HugeVector<CellPiece> pieces_by_cell(const LatticeCut& cut) {
 
 }  // namespace
 
-CellIndex index_cells(const LatticeCut& cut, const openvdb::FloatGrid& theta, bool flips_keep_topology) {
+CellIndex index_cells(const LatticeCut& cut, const openvdb::FloatGrid& theta, bool flips_keep_topology,
+                      const openvdb::MaskGrid* only) {
   CellIndex idx;
-  const std::size_t np = cut.pieces.size();
-  const HugeVector<CellPiece> by_cell = pieces_by_cell(cut);
+  HugeVector<CellPiece> by_cell = pieces_by_cell(cut);
+  if (only) {
+    auto acc = only->getConstAccessor();
+    std::size_t kept = 0;
+    for (std::size_t i = 0; i < by_cell.size(); ++i)
+      if (acc.isValueOn(cell_from_key(by_cell[i].first))) by_cell[kept++] = by_cell[i];
+    by_cell.resize(kept);
+  }
+  const std::size_t np = by_cell.size();
 
   // Θ's sign-change cells and the nodes near its zero set, per leaf node.
   std::vector<const openvdb::FloatTree::LeafNodeType*> leaves;
@@ -409,6 +417,10 @@ CellIndex index_cells(const LatticeCut& cut, const openvdb::FloatGrid& theta, bo
       if (!leaf && !acc.isValueOn(a)) out.push_back(cell_key(a));
     };
     for (std::size_t l = r.begin(); l != r.end(); ++l) {
+      // A leaf none of whose cells (nor the cells just below it, which its nodes are corners of) is to be
+      // indexed: skipped.
+      if (only && !box_touches(only->tree(), leaves[l]->origin().offsetBy(-1), leaves[l]->origin().offsetBy(7)))
+        continue;
       const float* buf = leaves[l]->buffer().data();
       for (auto it = leaves[l]->cbeginValueOn(); it; ++it) {
         const openvdb::Coord c = it.getCoord();
@@ -491,6 +503,10 @@ CellIndex index_cells(const LatticeCut& cut, const openvdb::FloatGrid& theta, bo
     radix_sort(sign_cells, scratch);
   }
   sign_cells.erase(std::unique(sign_cells.begin(), sign_cells.end()), sign_cells.end());
+  if (only) {
+    auto acc = only->getConstAccessor();
+    std::erase_if(sign_cells, [&](std::uint64_t c) { return !acc.isValueOn(cell_from_key(c)); });
+  }
 
   idx.cells.reserve(sign_cells.size() + np / 2);
   idx.piece_order.resize(np);

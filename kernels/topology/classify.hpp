@@ -54,7 +54,10 @@ inline constexpr double kSignTolerance = 0.1;
 //! leaf nodes: from their minimum corner when it is active, else from a lattice edge with an active end
 //! along which Θ changes sign. Θ need not be a distance; only a sign change between two inactive nodes (a
 //! band broken through) goes unseen.
-CellIndex index_cells(const LatticeCut& cut, const openvdb::FloatGrid& theta, bool flips_keep_topology = true);
+//! With `only`, just the cells that are active voxels of it (keyed by their minimum corner) are indexed: a
+//! local ConstrainTopology (constrain.hpp), where the others count as simple.
+CellIndex index_cells(const LatticeCut& cut, const openvdb::FloatGrid& theta, bool flips_keep_topology = true,
+                      const openvdb::MaskGrid* only = nullptr);
 
 //! Θ's value at a lattice node, with the sign decided by index_cells (a flipped zero becomes negative).
 float node_value(const openvdb::FloatGrid::ConstAccessor& acc, const CellIndex& index, const openvdb::Coord& node);

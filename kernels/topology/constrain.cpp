@@ -3,6 +3,10 @@
 #include <chrono>
 #include <cmath>
 
+#include <openvdb/tools/Morphology.h>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
 #include "kernels/mesh/mesh_queries.hpp"
 #include "kernels/topology/classify.hpp"
 #include "kernels/topology/lattice_cut.hpp"
@@ -93,51 +97,179 @@ void record(const SurfaceMesh& old_mesh, const SurfaceMesh& out, const Assembly&
   record_patches(out, W.created, EventKind::PatchCreate, events);
 }
 
-}  // namespace
+// The cells examined around the complex region found slab by slab: its 26 neighbours must be examined (the
+// stitching reads their pieces), and a margin more saves a round when the region grows by a layer.
+constexpr int kExaminedMargin = 2;
+constexpr int kMaxExaminedRounds = 8;
 
-ConstrainReport constrain_topology(SurfaceMesh& mesh, const openvdb::FloatGrid& theta, const ConstrainParams& params,
-                                   EventList* events) {
-  const auto t0 = Clock::now();
-  ConstrainReport report;
+// Whether every cell of `region` and its 26 neighbours is a cell of `examined`; if not, the cells within
+// `grow` of the region join `examined`.
+bool region_surrounded(const std::vector<std::uint64_t>& region, openvdb::MaskGrid& examined, int grow) {
+  auto acc = examined.getConstAccessor();
+  bool all = true;
+  for (std::size_t i = 0; i < region.size() && all; ++i) {
+    const openvdb::Coord c = cell_from_key(region[i]);
+    for (int d = 0; d < 27 && all; ++d) all = acc.isValueOn(c.offsetBy(d % 3 - 1, d / 3 % 3 - 1, d / 9 - 1));
+  }
+  if (all) return true;
+  openvdb::MaskTree grown;
+  for (std::uint64_t k : region) grown.setValueOn(cell_from_key(k));
+  openvdb::tools::dilateActiveValues(grown, grow, openvdb::tools::NN_FACE_EDGE_VERTEX,
+                                     openvdb::tools::IGNORE_TILES);
+  examined.tree().topologyUnion(grown);
+  return false;
+}
+
+// Where to cut M slab by slab: across the longest side of the box of cells of M's faces and Θ's sign
+// changes, into slabs whose faces' boxes hold about `budget` cells each (about the pieces the cut of those
+// faces makes, or a few times more). One slab when all of M is within budget.
+struct Slabs {
+  openvdb::CoordBBox box;
+  int axis = 0;
+  std::vector<int> begin;  //!< slab k holds the cells with axis coordinate in [begin[k], begin[k + 1])
+};
+Slabs plan_slabs(const SurfaceMesh& mesh, const openvdb::FloatGrid& theta, double budget) {
   const openvdb::math::Transform& xform = theta.transform();
-  if (!xform.isLinear()) TT_THROW(InvalidInput, "constrain topology: the level set's transform is not linear");
-  if (params.max_region_growth < 0)
-    TT_THROW(InvalidInput, "constrain topology: max_region_growth must be >= 0, got " << params.max_region_growth);
+  const std::size_t nf = mesh.faces_size();
+  std::vector<openvdb::CoordBBox> boxes(nf);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nf, 4096), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t f = r.begin(); f != r.end(); ++f) {
+      if (mesh.is_deleted(Face(Index(f)))) continue;
+      for (Vertex v : mesh.vertices(Face(Index(f)))) {
+        const Vec3& w = mesh.position(v);
+        const openvdb::Vec3d q = xform.worldToIndex(openvdb::Vec3d(w.x(), w.y(), w.z()));
+        if (!q.isFinite() || std::abs(q.x()) > kCellRange || std::abs(q.y()) > kCellRange || std::abs(q.z()) > kCellRange) {
+          boxes[f] = openvdb::CoordBBox();  // the cut reports it
+          break;
+        }
+        boxes[f].expand(openvdb::Coord::floor(q));
+      }
+    }
+  });
+  Slabs s;
+  double total = 0;
+  for (const auto& b : boxes)
+    if (!b.empty()) s.box.expand(b), total += double(b.volume());
+  if (budget <= 0 || total <= budget || s.box.empty()) return s;
+  const openvdb::CoordBBox active = theta.evalActiveVoxelBoundingBox();
+  if (!active.empty()) s.box.expand(active);
+  const openvdb::Coord dim = s.box.dim();
+  s.axis = dim[0] >= dim[1] && dim[0] >= dim[2] ? 0 : dim[1] >= dim[2] ? 1 : 2;
+  const int lo = s.box.min()[s.axis], n = dim[s.axis];
+  std::vector<double> cells(std::size_t(n) + 1, 0.0);  // by the face box's lowest coordinate
+  for (const auto& b : boxes)
+    if (!b.empty()) cells[std::size_t(b.min()[s.axis] - lo)] += double(b.volume());
+  s.begin.push_back(lo);
+  double acc = 0;
+  for (int k = 0; k < n; ++k) {
+    acc += cells[std::size_t(k)];
+    if (acc >= budget && k + 1 < n) {
+      s.begin.push_back(lo + k + 1);
+      acc = 0;
+    }
+  }
+  s.begin.push_back(lo + n);
+  if (s.begin.size() <= 2) s.begin.clear();
+  return s;
+}
 
-  LatticeCut cut = cut_by_lattice(mesh, xform);
-  report.seconds_cut = since(t0);
-  const CellIndex index = index_cells(cut, theta, params.flips_keep_topology);
-  report.seconds_index = since(t0) - report.seconds_cut;
-  std::vector<std::uint64_t> region =
-      complex_cells(mesh, cut, index, theta, topology::ClassifyPath::kFast, &report.cells_by_verdict);
-  report.bad_faces = cut.bad_faces.size();
-  report.seconds_classify = since(t0);
-  if (params.count_components) {
-    const auto tc = Clock::now();
-    report.components_before = int(connected_components(mesh));
-    report.seconds_components = since(tc);
+// The complex cells (§4.3, steps 1-2) slab by slab, each with its own cut of the faces that reach it (and 2
+// cells beyond, so that the signs index_cells takes from M's crossings there are those of the whole cut):
+// the cut of all of M at once is most of ConstrainTopology's memory on a fine lattice. The verdicts are
+// counted into `report`.
+std::vector<std::uint64_t> complex_in_slabs(const SurfaceMesh& mesh, const openvdb::FloatGrid& theta,
+                                            const ConstrainParams& params, const Slabs& slabs,
+                                            ConstrainReport& report) {
+  const int axis = slabs.axis;
+  std::vector<std::uint64_t> region;
+  report.cells_by_verdict = {};
+  for (std::size_t i = 0; i + 1 < slabs.begin.size(); ++i) {
+    const int a = slabs.begin[i], b = slabs.begin[i + 1];  // [a, b)
+    openvdb::CoordBBox box = slabs.box;
+    box.expand(2);
+    box.min()[axis] = a - 2;
+    box.max()[axis] = b + 1;
+    auto only = openvdb::MaskGrid::create();
+    only->tree().fill(box, true);
+    const auto t0 = Clock::now();
+    const LatticeCut cut = cut_by_lattice(mesh, theta.transform(), only.get());
+    const double cut_seconds = since(t0);
+    report.seconds_cut += cut_seconds;
+    const CellIndex index = index_cells(cut, theta, params.flips_keep_topology, only.get());
+    report.seconds_index += since(t0) - cut_seconds;
+    const std::vector<CellVerdict> verdict = classify_cells(mesh, cut, index, theta);
+    const auto in_slab = [&](const openvdb::Coord& c) { return c[axis] >= a && c[axis] < b; };
+    for (std::size_t k = 0; k < verdict.size(); ++k) {
+      const openvdb::Coord c = cell_from_key(index.cells[k]);
+      if (!in_slab(c)) continue;
+      ++report.cells_by_verdict[int(verdict[k])];
+      if (verdict[k] != CellVerdict::kSimple) region.push_back(index.cells[k]);
+    }
+    for (const auto& bb : cut.bad_boxes)
+      for (int x = bb[0].x(); x <= bb[1].x(); ++x)
+        for (int y = bb[0].y(); y <= bb[1].y(); ++y)
+          for (int z = bb[0].z(); z <= bb[1].z(); ++z)
+            if (in_slab(openvdb::Coord(x, y, z))) region.push_back(cell_key(openvdb::Coord(x, y, z)));
+    report.bad_faces += cut.bad_faces.size();
+    report.seconds_classify += since(t0);
   }
-  if (region.empty()) {
-    report.components_after = report.components_before;
-    report.seconds_total = since(t0);
-    return report;
+  std::sort(region.begin(), region.end());
+  region.erase(std::unique(region.begin(), region.end()), region.end());
+  return region;
+}
+
+// The cut, the index, the classification and the replacement (§4.3, steps 1-3): of all of M (`only` null), or
+// for the complex cells `known` that complex_in_slabs found, of the faces that reach the cells of `only`
+// (`only` must hold the cells around `known`). kNone when no cell is complex; kGrow when `only` lacks cells
+// around the replaced region (those `grow` cells around it were added). Seconds and counts add up in `report`.
+enum class Outcome { kNone, kReplaced, kGrow };
+struct Replaced {
+  LatticeCut cut;
+  std::vector<std::uint64_t> region;
+  Assembly A;
+  SurfaceMesh result;
+};
+Outcome replace_complex(const SurfaceMesh& mesh, const openvdb::FloatGrid& theta, const ConstrainParams& params,
+                        const std::vector<std::uint64_t>* known, openvdb::MaskGrid* only, int grow,
+                        ConstrainReport& report, Replaced& R) {
+  const openvdb::math::Transform& xform = theta.transform();
+  const auto t0 = Clock::now();
+  R.cut = LatticeCut();
+  R.cut = cut_by_lattice(mesh, xform, only);
+  LatticeCut& cut = R.cut;
+  const double cut_seconds = since(t0);
+  report.seconds_cut += cut_seconds;
+  const CellIndex index = index_cells(cut, theta, params.flips_keep_topology, only);
+  report.seconds_index += since(t0) - cut_seconds;
+  std::vector<std::uint64_t>& region = R.region;
+  if (known) {
+    region = *known;
+  } else {
+    region = complex_cells(mesh, cut, index, theta, topology::ClassifyPath::kFast, &report.cells_by_verdict);
+    report.bad_faces = cut.bad_faces.size();
+    report.seconds_classify += since(t0);
   }
+  if (region.empty()) return Outcome::kNone;
   auto timed = [](double& acc, auto&& f) {
     const auto ts = Clock::now();
     f();
     acc += since(ts);
   };
   timed(report.seconds_slivers, [&] { absorb_sliver_pieces(mesh, cut, region); });
+  if (only && !region_surrounded(region, *only, grow)) return Outcome::kGrow;
 
   // Replacement, growing the region when a check fails (§4.3: "if a local repair fails, grow"), then
   // taking in the cells of any sliver (at most kSliverRounds times; a valid result is never given up).
   const auto t1 = Clock::now();
   constexpr int kSliverRounds = 3;
-  Assembly A, valid_A;
-  SurfaceMesh result, valid_result;
+  Assembly& A = R.A;
+  SurfaceMesh& result = R.result;
+  Assembly valid_A;
+  SurfaceMesh valid_result;
   std::vector<std::uint64_t> valid_region;
   bool have_valid = false;
   std::string why;
+  report.region_growth = 0;
   for (int attempt = 0, sliver_round = 0;;) {
     bool ok = false;
     timed(report.seconds_assemble, [&] { ok = assemble(mesh, cut, index, region, theta, A, why); });
@@ -182,6 +314,7 @@ ConstrainReport constrain_topology(SurfaceMesh& mesh, const openvdb::FloatGrid& 
       region = std::move(valid_region);
       break;
     }
+    if (only && !region_surrounded(region, *only, grow)) return Outcome::kGrow;
     if (attempt >= params.max_region_growth)
       TT_THROW(TopologyError, "constrain topology: replacement failed after growing the complex region "
                                   << attempt << " times: " << why);
@@ -192,8 +325,73 @@ ConstrainReport constrain_topology(SurfaceMesh& mesh, const openvdb::FloatGrid& 
     ++attempt;
     ++report.region_growth;
   }
-  report.complex_cells = region.size();
-  report.seconds_replace = since(t1);
+  report.seconds_replace += since(t1);
+  if (only && !region_surrounded(region, *only, grow)) return Outcome::kGrow;
+  return Outcome::kReplaced;
+}
+
+}  // namespace
+
+ConstrainReport constrain_topology(SurfaceMesh& mesh, const openvdb::FloatGrid& theta, const ConstrainParams& params,
+                                   EventList* events) {
+  const auto t0 = Clock::now();
+  ConstrainReport report;
+  const openvdb::math::Transform& xform = theta.transform();
+  if (!xform.isLinear()) TT_THROW(InvalidInput, "constrain topology: the level set's transform is not linear");
+  if (params.max_region_growth < 0)
+    TT_THROW(InvalidInput, "constrain topology: max_region_growth must be >= 0, got " << params.max_region_growth);
+  if (params.count_components) {
+    const auto tc = Clock::now();
+    report.components_before = int(connected_components(mesh));
+    report.seconds_components = since(tc);
+  }
+
+  // One pass over all of M, unless the faces' boxes hold more than params.max_cut_cells cells: then the
+  // complex cells are found slab by slab, and the replacement cuts only the faces around them (the
+  // examined cells), more of them while the region reaches beyond (growth, slivers).
+  const Slabs slabs = plan_slabs(mesh, theta, params.max_cut_cells);
+  openvdb::MaskGrid::Ptr examined;
+  std::vector<std::uint64_t> known;
+  if (!slabs.begin.empty()) {
+    report.slabs = int(slabs.begin.size()) - 1;
+    known = complex_in_slabs(mesh, theta, params, slabs, report);
+    const std::vector<std::uint64_t>& region = known;
+    if (region.empty()) {
+      report.components_after = report.components_before;
+      report.seconds_total = since(t0);
+      return report;
+    }
+    examined = openvdb::MaskGrid::create();
+    for (std::uint64_t k : region) examined->tree().setValueOn(cell_from_key(k));
+    openvdb::tools::dilateActiveValues(examined->tree(), kExaminedMargin, openvdb::tools::NN_FACE_EDGE_VERTEX,
+                                       openvdb::tools::IGNORE_TILES);
+  }
+  Replaced R;
+  Outcome outcome = Outcome::kNone;
+  for (int round = 0;; ++round) {
+    // The examined cells grow around the region by kExaminedMargin + 1, then twice, four times as much, ...
+    const int grow = (kExaminedMargin + 1) << std::min(round, 6);
+    try {
+      outcome = replace_complex(mesh, theta, params, examined ? &known : nullptr, examined.get(), grow, report, R);
+    } catch (const TopologyError&) {
+      if (!examined) throw;
+      examined.reset();  // all of M in one pass
+      continue;
+    }
+    if (outcome != Outcome::kGrow) break;
+    ++report.examined_growth;
+    if (round + 1 >= kMaxExaminedRounds) examined.reset();
+  }
+  const bool any = outcome == Outcome::kReplaced;
+  if (!any) {
+    report.components_after = report.components_before;
+    report.seconds_total = since(t0);
+    return report;
+  }
+  const LatticeCut& cut = R.cut;
+  const Assembly& A = R.A;
+  SurfaceMesh& result = R.result;
+  report.complex_cells = R.region.size();
 
   // §4.4: weights of the new vertices, then events and carried properties.
   const auto t2 = Clock::now();

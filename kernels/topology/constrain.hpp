@@ -62,6 +62,13 @@ struct ConstrainParams {
   //! surface. Off, they take it wherever the crossings agree, and across a gap or a sheet of Θ that close
   //! to a node M keeps its own topology.
   bool flips_keep_topology = true;
+  //! When the cut of all of M would be large (its faces' boxes of cells hold more than this many cells), the
+  //! complex cells are found in slabs, each cutting only the faces that reach it, and the replacement cuts
+  //! only the faces around the complex region: far less memory (on the tracker's lattice of an eighth of an
+  //! edge the cut of all of M was most of it). The cells are those of one pass, up to the signs that nodes
+  //! near Θ's zero set take from M (classify.hpp), decided in sequence: on resurfaced pcow at L/4 the result
+  //! differed from one pass in 9 of 40 frames (docs/results.md). 0: always one pass (the default).
+  double max_cut_cells = 0;
 };
 
 struct ConstrainReport {
@@ -77,6 +84,8 @@ struct ConstrainReport {
   std::size_t bad_faces = 0;         //!< faces whose clipping fell back to whole-box replacement
   int region_growth = 0;             //!< layers the region grew by
   int components_before = 0, components_after = 0;  //!< 0 unless ConstrainParams::count_components
+  int slabs = 0;            //!< slabs the complex cells were found in (0: one pass over all of M)
+  int examined_growth = 0;  //!< times the replacement after slabs reached beyond the cells cut for it
   double seconds_cut = 0;       //!< cutting M by the lattice
   double seconds_index = 0;     //!< grouping the pieces by cell, Θ's sign-change cells (within seconds_classify)
   double seconds_classify = 0;  //!< cutting and classification

@@ -277,6 +277,18 @@ void clip_face(const SurfaceMesh& mesh, const std::vector<Vec3>& P, Index f, Chu
   out.face_count.push_back(std::uint32_t(out.pieces.size() - first_piece));
 }
 
+// Whether face f's box of cells (from its cut positions P) holds an active voxel of `cells`.
+bool spans_cells(const SurfaceMesh& mesh, const std::vector<Vec3>& P, Index f, const openvdb::MaskTree& cells) {
+  const auto v = mesh.vertices(Face(f));
+  openvdb::Coord lo, hi;
+  for (int a = 0; a < 3; ++a) {
+    const double x = P[v[0].idx][a], y = P[v[1].idx][a], z = P[v[2].idx][a];
+    lo[a] = int(std::floor(std::min({x, y, z})));
+    hi[a] = int(std::floor(std::max({x, y, z})));
+  }
+  return box_touches(cells, lo, hi);
+}
+
 }  // namespace
 
 PointKey vertex_key(Index v) { return {std::uint64_t(v), 0}; }
@@ -339,7 +351,30 @@ Vec3 cut_to_world(const openvdb::math::Transform& xform, const Vec3& p) {
   return {w.x(), w.y(), w.z()};
 }
 
-LatticeCut cut_by_lattice(const SurfaceMesh& mesh, const openvdb::math::Transform& xform) {
+bool box_touches(const openvdb::MaskTree& cells, const openvdb::Coord& lo, const openvdb::Coord& hi) {
+  using Leaf = openvdb::MaskTree::LeafNodeType;
+  constexpr int kDim = int(Leaf::DIM);
+  const openvdb::Coord first = lo & ~(kDim - 1);
+  for (int x = first.x(); x <= hi.x(); x += kDim)
+    for (int y = first.y(); y <= hi.y(); y += kDim)
+      for (int z = first.z(); z <= hi.z(); z += kDim) {
+        const openvdb::Coord origin(x, y, z);
+        const Leaf* leaf = cells.probeConstLeaf(origin);
+        if (!leaf) {
+          if (cells.isValueOn(origin)) return true;  // inside an active tile
+          continue;
+        }
+        const openvdb::Coord a = openvdb::Coord::maxComponent(lo, origin);
+        const openvdb::Coord b = openvdb::Coord::minComponent(hi, origin.offsetBy(kDim - 1));
+        for (int i = a.x(); i <= b.x(); ++i)
+          for (int j = a.y(); j <= b.y(); ++j)
+            for (int k = a.z(); k <= b.z(); ++k)
+              if (leaf->isValueOn(openvdb::Coord(i, j, k))) return true;
+      }
+  return false;
+}
+
+LatticeCut cut_by_lattice(const SurfaceMesh& mesh, const openvdb::math::Transform& xform, const openvdb::MaskGrid* only) {
   LatticeCut cut;
   const std::size_t nv = mesh.vertices_size(), nf = mesh.faces_size();
   cut.P.resize(nv);
@@ -399,8 +434,10 @@ LatticeCut cut_by_lattice(const SurfaceMesh& mesh, const openvdb::math::Transfor
         out.key_cap = key_base[c + 1] - key_base[c];
       }
       for (std::size_t f = c * kChunk; f < end; ++f) {
-        if (mesh.is_deleted(Face(Index(f)))) out.face_count.push_back(0);
-        else clip_face(mesh, cut.P, Index(f), out, cut.face_vertices[f]);
+        if (mesh.is_deleted(Face(Index(f))) || (only && !spans_cells(mesh, cut.P, Index(f), only->tree())))
+          out.face_count.push_back(0);
+        else
+          clip_face(mesh, cut.P, Index(f), out, cut.face_vertices[f]);
       }
     }
   });

@@ -99,9 +99,16 @@ struct LatticeCut {
 };
 
 //! Cut the live faces of `mesh` by the lattice of `xform` (index space: voxel centres at integers,
-//! cells between them). Deterministic and parallel over fixed chunks of faces.
+//! cells between them). Deterministic and parallel over fixed chunks of faces. With `only`, a face is cut
+//! only when the box of cells it spans holds an active voxel of `only` (a cell, keyed by its minimum corner,
+//! like Θ's voxels): the others get no pieces, as if whole (a local ConstrainTopology, constrain.hpp).
 //! \throw InvalidInput on a non-finite coordinate or a mesh beyond the cell key range.
-LatticeCut cut_by_lattice(const SurfaceMesh& mesh, const openvdb::math::Transform& xform);
+LatticeCut cut_by_lattice(const SurfaceMesh& mesh, const openvdb::math::Transform& xform,
+                          const openvdb::MaskGrid* only = nullptr);
+
+//! Whether the box of cells [lo, hi] (inclusive) holds an active voxel or tile of `cells`: by leaf node, so
+//! a box far from every active voxel costs a few lookups.
+bool box_touches(const openvdb::MaskTree& cells, const openvdb::Coord& lo, const openvdb::Coord& hi);
 
 //! The canonical position (index space plus kShift, like LatticeCut::P) of a subdivision point (kinds Vertex, EdgePoint, FacePoint), and
 //! its weights over mesh vertices: one vertex; the two edge ends (vertex(e,0), vertex(e,1)); the three

@@ -306,6 +306,44 @@ TEST(ConstrainTopology, EventsPropagateAffineFieldsExactlyAtCutsAndConstantsEver
   EXPECT_EQ(back.ids.size(), before.ids.size());
 }
 
+// ConstrainParams::max_cut_cells: the complex cells found slab by slab, the replacement cut only around
+// them. M: two pairs of overlapping balls far apart, one component each; Θ: both pairs pulled apart.
+TEST(ConstrainTopology, SlabsGiveTheResultOfOnePass) {
+  const double h = 0.04;
+  const SurfaceMesh m = mc_mesh(*unite(unite(sphere(0.5, {-2.42, 0, 0}, h), sphere(0.5, {-1.58, 0, 0}, h)),
+                                       unite(sphere(0.5, {1.58, 0, 0}, h), sphere(0.5, {2.42, 0, 0}, h))));
+  const GridPtr theta = unite(unite(sphere(0.5, {-2.56, 0.01, 0}, h), sphere(0.5, {-1.44, 0.01, 0}, h)),
+                              unite(sphere(0.5, {1.44, 0.01, 0}, h), sphere(0.5, {2.56, 0.01, 0}, h)));
+  auto run = [&](double max_cut_cells, ConstrainReport& r) {
+    SurfaceMesh out = m.clone();
+    ConstrainParams p;
+    p.max_cut_cells = max_cut_cells;
+    EventList ev;
+    r = constrain_topology(out, *theta, p, &ev);
+    expect_sound(out);
+    std::vector<Vec3> P;
+    std::vector<std::array<Index, 3>> T;
+    extract_triangles(out, P, T);
+    return std::tuple(P, T, out.ids(), ev);
+  };
+  ConstrainReport one, sliced, fine;
+  const auto a = run(0, one);
+  const auto b = run(20000, sliced);
+  const auto c = run(2000, fine);
+  EXPECT_EQ(one.slabs, 0);
+  EXPECT_GT(sliced.slabs, 1);
+  EXPECT_GT(fine.slabs, sliced.slabs);
+  EXPECT_EQ(one.components_after, 4);
+  EXPECT_GT(one.complex_cells, 0u);
+  for (const ConstrainReport* r : {&sliced, &fine}) {
+    EXPECT_EQ(r->complex_cells, one.complex_cells);
+    EXPECT_EQ(r->cells_by_verdict, one.cells_by_verdict);
+    EXPECT_EQ(r->vertices_added, one.vertices_added);
+  }
+  EXPECT_TRUE(a == b);
+  EXPECT_TRUE(a == c);
+}
+
 TEST(ConstrainTopology, IdenticalWithOneThreadOrMany) {
   const double h = 0.04;
   auto run = [&](int threads) {
@@ -444,6 +482,7 @@ TEST(ConstrainTopology, ThrowsOnBadInput) {
   p.max_region_growth = -1;
   SurfaceMesh ok = test::icosphere(2).mesh();
   EXPECT_THROW(constrain_topology(ok, *theta, p), InvalidInput);
+
 }
 
 // The smallest triangle area over the mean (slivers: a marching-cubes vertex next to a lattice corner).
