@@ -353,6 +353,7 @@ const FrameReport& Tracker::add_frame(const openvdb::FloatGrid& target, const st
 
 const SurfaceMesh& Tracker::mesh() const { return impl_->mesh; }
 const EventList& Tracker::events() const { return impl_->events; }
+EventList Tracker::take_events() { return std::exchange(impl_->events, EventList{}); }
 const std::vector<Vec3>& Tracker::velocities() const { return impl_->velocities; }
 const FrameReport& Tracker::report() const { return impl_->report; }
 const TrackerParams& Tracker::params() const { return impl_->params; }

@@ -95,6 +95,10 @@ public:
   //! The event list of the last add_frame (§4.4): it takes M of the previous frame to M of this one.
   //! Empty for the first frame.
   const EventList& events() const;
+  //! Moves the event list of the last add_frame out, for a caller that keeps it beyond the next add_frame
+  //! (a writer running beside it) without a copy: a frame's list on a fine lattice is ~100 MB. events() is
+  //! empty afterwards; the next add_frame is unaffected (the tracker does not read its previous list).
+  EventList take_events();
   //! Per vertex of mesh(), the motion since the previous frame (position minus the previous frame's
   //! position propagated through events(), §4.6): per-frame velocity for motion blur. Zero on the first frame.
   const std::vector<Vec3>& velocities() const;

@@ -3,6 +3,7 @@
 #include <bit>
 #include <cmath>
 #include <cstring>
+#include <functional>
 #include <limits>
 
 #include "io/atomic_file.hpp"
@@ -11,13 +12,25 @@
 
 namespace topotrack {
 
-std::uint64_t event_file_checksum(std::string_view bytes) {
-  std::uint64_t h = 0xcbf29ce484222325ull;  // FNV-1a 64
-  for (unsigned char c : bytes) {
-    h ^= c;
-    h *= 0x100000001b3ull;
+namespace {
+
+//! FNV-1a 64, fed piece by piece as the bytes are produced.
+struct Fnv1a {
+  std::uint64_t h = 0xcbf29ce484222325ull;
+  void add(std::string_view bytes) {
+    for (unsigned char c : bytes) {
+      h ^= c;
+      h *= 0x100000001b3ull;
+    }
   }
-  return h;
+};
+
+}  // namespace
+
+std::uint64_t event_file_checksum(std::string_view bytes) {
+  Fnv1a sum;
+  sum.add(bytes);
+  return sum.h;
 }
 
 namespace {
@@ -30,6 +43,9 @@ constexpr std::size_t kEventHeadBytes = 1 + 4 * 4;
 constexpr std::size_t kRuleHeadBytes = 8 + 4;
 constexpr std::size_t kTermBytes = 8 + 8;
 constexpr std::size_t kChecksumBytes = 8;
+// encode_events hands its bytes on in pieces of about this size: a file is never held whole in memory (a
+// frame's list on a fine lattice is ~100 MB: resurfaced pcow, capture profile, two halvings).
+constexpr std::size_t kPieceBytes = 1 << 20;
 
 template <class T>
 void put(std::string& s, T v) {
@@ -87,10 +103,15 @@ class Reader {
 
 }  // namespace
 
-std::string encode_events(const EventList& events) {
+void encode_events(const EventList& events, const std::function<void(std::string_view)>& emit) {
   std::string s;
-  s.reserve(kHeaderBytes + events.size() * kEventHeadBytes + events.rule_count() * kRuleHeadBytes +
-            events.term_count() * kTermBytes + kChecksumBytes);
+  s.reserve(kPieceBytes + kPieceBytes / 4);
+  Fnv1a sum;
+  const auto hand_on = [&] {
+    sum.add(s);
+    emit(s);
+    s.clear();
+  };
   s.append(kMagic, sizeof kMagic);
   put<std::uint32_t>(s, kVersion);
   put<std::uint32_t>(s, 0);  // flags, reserved
@@ -125,9 +146,19 @@ std::string encode_events(const EventList& events) {
     for (VertexId id : v.out) put<std::uint64_t>(s, id);
     for (std::size_t r = v.forward_begin; r < v.forward_end; ++r) rule(r);
     for (std::size_t r = v.backward_begin; r < v.backward_end; ++r) rule(r);
+    if (s.size() >= kPieceBytes) hand_on();
   }
-  put<std::uint64_t>(s, event_file_checksum(s));
-  return s;
+  hand_on();
+  put<std::uint64_t>(s, sum.h);
+  emit(s);
+}
+
+std::string encode_events(const EventList& events) {
+  std::string bytes;
+  bytes.reserve(kHeaderBytes + events.size() * kEventHeadBytes + events.rule_count() * kRuleHeadBytes +
+                events.term_count() * kTermBytes + kChecksumBytes);
+  encode_events(events, [&](std::string_view piece) { bytes.append(piece); });
+  return bytes;
 }
 
 EventList decode_events(std::string_view bytes, const std::string& name) {
@@ -217,13 +248,13 @@ EventList decode_events(std::string_view bytes, const std::string& name) {
 }
 
 void write_events(const std::filesystem::path& path, const EventList& events) {
-  std::string bytes;
   try {
-    bytes = encode_events(events);
-  } catch (const InvalidInput& e) {
+    write_file_atomic(path, [&](AtomicFileWriter& w) {
+      encode_events(events, [&](std::string_view piece) { w.write(piece); });
+    });
+  } catch (const InvalidInput& e) {  // the file is untouched (the temporary one removed)
     TT_THROW(InvalidInput, path.string() << ": " << e.what());
   }
-  write_file_atomic(path, bytes);
 }
 
 EventList read_events(const std::filesystem::path& path) {

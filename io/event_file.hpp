@@ -3,6 +3,7 @@
 //! counts, then the records.
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <string>
 #include <string_view>
 
@@ -12,6 +13,9 @@ namespace topotrack {
 
 //! The file bytes. \throw InvalidInput on a non-finite rule weight (it could not be read back).
 std::string encode_events(const EventList& events);
+//! The same bytes handed to `emit` in order, in pieces of about 1 MiB, so that a writer never holds the
+//! whole file (write_events). \throw InvalidInput as above, possibly after some pieces were emitted.
+void encode_events(const EventList& events, const std::function<void(std::string_view)>& emit);
 //! \throw InvalidInput "<name>: byte <offset>: <fault>" on a bad magic, unsupported version, truncation,
 //! lying counts, unknown event kind, non-finite weight or trailing bytes.
 EventList decode_events(std::string_view bytes, const std::string& name);

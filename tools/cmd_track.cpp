@@ -353,7 +353,7 @@ void run_track(TrackOptions opt) {
     o.number = f.number;
     o.input = f.path.string();
     o.mesh = output_mesh(tracker);
-    o.events = tracker.events();
+    o.events = tracker.take_events();  // moved: the writer runs beside the next frame
     o.checkpoint = {f.number, long(i), tracker.edge_length(), tracker.voxel_size(), tracker.mesh().clone()};
     o.report = *r;
     o.load = std::move(cur.load);

@@ -3,7 +3,10 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <fstream>
+#include <iterator>
 #include <cstring>
 #include <limits>
 
@@ -36,6 +39,11 @@ EventList sample_events() {
   l.end_event();
   l.record_split(std::numeric_limits<VertexId>::max(), 0, 12345678901234ull, -1e-300);
   return l;
+}
+
+std::string read_bytes(const std::filesystem::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
 }
 
 // Overwrite bytes [at, at+sizeof v) with v (little endian host) and fix the checksum, so that only the
@@ -91,6 +99,39 @@ TEST(EventFile, LargeListRoundTrips) {
     l.record_collapse(i, i + 2, 200000 + i);
   }
   EXPECT_EQ(decode_events(encode_events(l), "mem"), l);
+}
+
+// write_events streams the bytes in pieces (a frame's list on a fine lattice is ~100 MB): the pieces are the
+// file's bytes, and a fault found after some were written leaves the previous file as it was.
+TEST(EventFile, StreamedInPiecesWithTheSameBytes) {
+  EventList l;
+  for (VertexId i = 0; i < 60000; ++i) l.record_subdivide(i, i + 1, i + 2, 300000 + i, 0.2, 0.3, 0.5);
+  std::vector<std::size_t> sizes;
+  std::string joined;
+  encode_events(l, [&](std::string_view piece) {
+    sizes.push_back(piece.size());
+    joined.append(piece);
+  });
+  const std::string whole = encode_events(l);
+  EXPECT_GT(whole.size(), std::size_t(4) << 20);
+  EXPECT_GE(sizes.size(), std::size_t(4));
+  EXPECT_LE(*std::max_element(sizes.begin(), sizes.end()), std::size_t(2) << 20);
+  EXPECT_EQ(joined, whole);
+
+  test::TempDir d;
+  write_events(d / "f.events", l);
+  EXPECT_EQ(read_events(d / "f.events"), l);
+  const std::string before = read_bytes(d / "f.events");
+  EventList bad = l;
+  bad.record_split(1, 2, 3, std::numeric_limits<double>::quiet_NaN());  // after ~6 MB of good records
+  try {
+    write_events(d / "f.events", bad);
+    ADD_FAILURE() << "a non-finite weight was written";
+  } catch (const InvalidInput& e) {
+    EXPECT_NE(std::string(e.what()).find((d / "f.events").string() + ": "), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(read_bytes(d / "f.events"), before);
+  EXPECT_EQ(d.entries(), (std::vector<std::string>{"f.events"}));
 }
 
 TEST(EventFile, EveryTruncationIsRejected) {
