@@ -41,7 +41,7 @@ TEST(Profile, EveryBundledProfileLoads) {
   EXPECT_EQ(load_profile("capture").voxel_size_factor, 0.5);
   EXPECT_EQ(load_profile("default").voxel_size_factor, 1.0);  // the paper's
   // A finer lattice where the topology differs (tests/engine/tracker_test.cpp); the paper has one lattice.
-  EXPECT_EQ(load_profile("capture").topology_refinements, 1);
+  EXPECT_EQ(load_profile("capture").topology_refinements, 2);
   EXPECT_EQ(load_profile("fluid").topology_refinements, 1);
   EXPECT_EQ(load_profile("default").topology_refinements, 0);
   EXPECT_EQ(load_profile("default").coarse_params.max_iterations_per_level_after_pass, 3);
