@@ -284,7 +284,8 @@ SmallComponentReport match_small_components(SurfaceMesh& mesh, const TargetSurfa
   for (std::size_t c = 0; c < s_small.vertices.size(); ++c)
     if (!s_present[c] && s_small.extent[c] <= max_extent) candidates.push_back(c);
   if (candidates.empty() && std::count(m_gone.begin(), m_gone.end(), 1) == 0) return report;
-  const Part rest = part_of(pos, tris, ids, [&](std::size_t v) {
+  large.reset();  // its scene is as large as M's; M can have ~360k vertices here after an L/8 lattice
+  Part rest = part_of(pos, tris, ids, [&](std::size_t v) {
     return m_small.label[v] == kInvalidIndex || !m_gone[m_small.label[v]];
   });
 
@@ -301,11 +302,13 @@ SmallComponentReport match_small_components(SurfaceMesh& mesh, const TargetSurfa
 
   // A small component of S that no part of M comes within `radius` of is copied in, with fresh ids; one that
   // comes that near only if its copy can lie apart from M (place_apart).
+  // The copies are gathered apart and appended to the rest once its scene is freed (resurfaced pcow, capture
+  // profile, frame 21: M has 363k vertices after ConstrainTopology on the L/8 lattice; docs/results.md).
   const std::span<const Vec3> s_pos = target.positions();
   VertexId next = mesh.next_id();
-  std::vector<Vec3> out_pos = rest.pos;
-  std::vector<VertexId> out_ids = rest.ids;
-  Soup out_tris = rest.tris;
+  std::vector<Vec3> add_pos;
+  std::vector<VertexId> add_ids;
+  Soup add_tris;
   std::vector<Index> copy(s_pos.size(), kInvalidIndex);
   // One at most 2√2 L across becomes an octahedron; the triangles of the others are gathered in one pass (a
   // spray of thousands of droplets must not cost a pass each).
@@ -331,19 +334,26 @@ SmallComponentReport match_small_components(SurfaceMesh& mesh, const TargetSurfa
       for (const auto& t : candidate_tris[c]) piece_tris.push_back({copy[t[0]], copy[t[1]], copy[t[2]]});
     }
     if (any_near(rest.scene(), s_pos, vs, radius) && !place_apart(rest, piece_pos, piece_tris, 2 * radius)) continue;
-    const std::size_t first = out_pos.size();
-    out_pos.insert(out_pos.end(), piece_pos.begin(), piece_pos.end());
+    const std::size_t first = rest.pos.size() + add_pos.size();
+    add_pos.insert(add_pos.end(), piece_pos.begin(), piece_pos.end());
     for (const auto& t : piece_tris)
-      out_tris.push_back({Index(first + t[0]), Index(first + t[1]), Index(first + t[2])});
+      add_tris.push_back({Index(first + t[0]), Index(first + t[1]), Index(first + t[2])});
     patch.clear();
-    for (std::size_t i = first; i < out_pos.size(); ++i) {
-      out_ids.push_back(next);
+    for (std::size_t i = 0; i < piece_pos.size(); ++i) {
+      add_ids.push_back(next);
       patch.push_back(next++);
     }
     if (events) record(EventKind::PatchCreate, patch, closest_terms(rest.scene(), rest.ids, centroid(s_pos, vs)), *events);
     ++report.added;
   }
   if (report.added + report.removed == 0) return report;
+  rest.surface.reset();
+  std::vector<Vec3> out_pos = std::move(rest.pos);
+  std::vector<VertexId> out_ids = std::move(rest.ids);
+  Soup out_tris = std::move(rest.tris);
+  out_pos.insert(out_pos.end(), add_pos.begin(), add_pos.end());
+  out_ids.insert(out_ids.end(), add_ids.begin(), add_ids.end());
+  out_tris.insert(out_tris.end(), add_tris.begin(), add_tris.end());
   mesh = SurfaceMesh::from_triangles(out_pos, out_tris, out_ids);
   mesh.set_next_id(next);
   return report;
