@@ -21,6 +21,13 @@ struct TrackerParams {
   double edge_length = 0;
   //! Voxel size of the signed distance grids of §4.3 as a multiple of L.
   double voxel_size_factor = 1.0;
+  //! > 0: the voxel size of the first lattice in world units, instead of voxel_size_factor × L. For surfaces
+  //! that were extracted from a grid (marching cubes of a simulation's level set; `topotrack gen resurface`
+  //! writes its voxel size to gen.json), that grid's spacing or half of it, with the grid's nodes at integer
+  //! multiples of it (OpenVDB's convention without a translation): the lattice's nodes then sample the
+  //! extraction's own sign pattern and see every tunnel and bridge the input has, however thin (resurfaced
+  //! pcow, docs/results.md, 2026-11-25 late).
+  double voxel_size = 0;
   //! ConstrainTopology(M, φ_S) tolerance, in voxels: at lattice nodes within this distance of both M and
   //! S, φ_S takes M's sign (see agree_near_surface in tracker.cpp), so alignment error below it causes no
   //! resampling. 0 is the paper's exact rule; then every node that M and S put on different sides makes
@@ -64,6 +71,11 @@ struct TrackerParams {
   FineParams fine_params;
   ConstrainParams constrain;
 };
+
+//! The voxel size of the first lattice (TrackerParams::voxel_size, else voxel_size_factor × edge_length).
+inline double first_voxel_size(const TrackerParams& p, double edge_length) {
+  return p.voxel_size > 0 ? p.voxel_size : p.voxel_size_factor * edge_length;
+}
 
 //! The folder of the bundled profiles: $TOPOTRACK_PROFILES, else <source>/profiles, else the installed
 //! share/topotrack/profiles.

@@ -109,7 +109,7 @@ struct Tracker::Impl {
     edge_length = params.edge_length > 0 ? params.edge_length : mean_edge_length(target);
     if (!(edge_length > 0)) TT_THROW(InvalidInput, "the first frame has no edges to derive the edge length from");
     mesh = std::move(target);
-    voxel_size = params.voxel_size_factor * edge_length;
+    voxel_size = first_voxel_size(params, edge_length);
     improve(nullptr);
   }
 

@@ -309,7 +309,7 @@ void run_track(TrackOptions opt) {
   // after every frame before it is written, as they would one frame at a time.
   auto load_params_now = [&] {
     FrameLoadParams p = load_params;
-    p.voxel_size = tracker.frames() > 0 ? tracker.voxel_size() : params.voxel_size_factor * params.edge_length;
+    p.voxel_size = tracker.frames() > 0 ? tracker.voxel_size() : first_voxel_size(params, params.edge_length);
     return p;
   };
   tbb::task_group tasks;

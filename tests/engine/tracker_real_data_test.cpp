@@ -14,6 +14,8 @@
 #include "kernels/gen/gen_sequence.hpp"
 #include "kernels/mesh/mesh_convert.hpp"
 #include "kernels/mesh/mesh_queries.hpp"
+#include "kernels/sdf/signed_distance.hpp"
+#include "kernels/topology/constrain.hpp"
 
 namespace topotrack {
 namespace {
@@ -26,19 +28,32 @@ bool have_pcow() {
   return std::filesystem::exists(std::filesystem::path(TOPOTRACK_SHARED_DIR) / "data" / "pcow" / "pcow.0002.ply");
 }
 
-//! Resurfaced pcow frames 1 and 2, as `topotrack gen resurface ../shared/data/pcow --frames 2` makes them.
-std::pair<SurfaceMesh, SurfaceMesh> resurfaced_pcow() {
+struct ResurfacedPair {
+  SurfaceMesh first, second;
+  double grid_spacing = 0;  //!< the voxel size `gen resurface` extracted them at
+};
+
+//! Resurfaced pcow frames `start` and `start` + 1, as `topotrack gen resurface ../shared/data/pcow --frames 2
+//! --start START` makes them.
+ResurfacedPair resurfaced_pcow_pair(long start) {
   const std::filesystem::path dir =
       std::filesystem::temp_directory_path() / ("topotrack_tracker_real_" + std::to_string(::getpid()));
   GenParams g;
   g.kind = "resurface";
   g.source = (std::filesystem::path(TOPOTRACK_SHARED_DIR) / "data" / "pcow").string();
   g.frames = 2;
-  generate_sequence(g, dir);
-  std::pair<SurfaceMesh, SurfaceMesh> frames{to_surface_mesh(read_mesh(dir / "resurface.0001.ply")),
-                                             to_surface_mesh(read_mesh(dir / "resurface.0002.ply"))};
+  g.start = start;
+  const GenReport report = generate_sequence(g, dir);
+  ResurfacedPair pair{to_surface_mesh(read_mesh(dir / report.frames.at(0).file)),
+                      to_surface_mesh(read_mesh(dir / report.frames.at(1).file)), report.voxel_size};
   std::filesystem::remove_all(dir);
-  return frames;
+  return pair;
+}
+
+//! Resurfaced pcow frames 1 and 2, as `topotrack gen resurface ../shared/data/pcow --frames 2` makes them.
+std::pair<SurfaceMesh, SurfaceMesh> resurfaced_pcow() {
+  ResurfacedPair pair = resurfaced_pcow_pair(1);
+  return {std::move(pair.first), std::move(pair.second)};
 }
 
 TEST(TrackerRealData, HalfEdgeVoxelsKeepAThinTipThePapersLatticeCuts) {
@@ -83,6 +98,48 @@ TEST(TrackerRealData, CaptureProfileRefinesTheLatticeForAHandleItMisses) {
   EXPECT_EQ(refined.euler, euler_characteristic(f2));
   const bool one_matches = one.components == std::size_t(connected_components(f2)) && one.euler == euler_characteristic(f2);
   EXPECT_EQ(refined.topology_level > 0, !one_matches) << "the finer lattice is kept exactly when the first one misses";
+}
+
+// Resurfaced pcow frame 17 (as the second of two from frame 16) has handles and bridges far thinner than any lattice the tracker can afford
+// (marching cubes' saddles), so which of them a lattice sees depends on where its nodes fall: ConstrainTopology
+// of frame 16 onto it on the capture profile's first lattice (half the mean edge length) or half of that gives
+// another topology. On the grid the frame was extracted on, or half its spacing, the nodes sample the
+// extraction's own signs and the result has frame 17's components and Euler characteristic
+// (tracker.voxel_size).
+TEST(TrackerRealData, TheExtractionGridGivesTheInputsTopology) {
+  if (!have_pcow()) GTEST_SKIP() << "no pcow data";
+  const ResurfacedPair pair = resurfaced_pcow_pair(16);
+  ASSERT_GT(pair.grid_spacing, 0);
+  const Index want_components = connected_components(pair.second);
+  const long want_euler = euler_characteristic(pair.second);
+  const auto constrained = [&](double h) {
+    SurfaceMesh m = pair.first.clone();
+    const auto phi = signed_distance(pair.second, h, 1.75, 0.25);
+    constrain_topology(m, *phi);
+    m.validate(true);
+    std::printf("voxel %.6g: components %ld, Euler %ld (frame 17: %ld, %ld)\n", h, long(connected_components(m)),
+                euler_characteristic(m), long(want_components), want_euler);
+    return std::pair<Index, long>{connected_components(m), euler_characteristic(m)};
+  };
+  const TrackerParams capture = load_profile("capture");
+  const double h0 = first_voxel_size(capture, mean_edge_length(pair.first));
+  EXPECT_NE(constrained(h0), std::make_pair(want_components, want_euler)) << "the case this test is about";
+  EXPECT_NE(constrained(0.5 * h0), std::make_pair(want_components, want_euler)) << "the case this test is about";
+  EXPECT_EQ(constrained(pair.grid_spacing), std::make_pair(want_components, want_euler));
+  EXPECT_EQ(constrained(0.5 * pair.grid_spacing), std::make_pair(want_components, want_euler));
+
+  // The tracker takes that lattice from tracker.voxel_size instead of voxel_size_factor × L.
+  TrackerParams p = capture;
+  char setting[64];
+  std::snprintf(setting, sizeof setting, "tracker.voxel_size=%.17g", 0.5 * pair.grid_spacing);
+  apply_setting(p, setting);
+  Tracker tracker(p);
+  tracker.add_frame(pair.first.clone());
+  EXPECT_NEAR(tracker.voxel_size(), 0.5 * pair.grid_spacing, 1e-9 * pair.grid_spacing);
+  const FrameReport r = tracker.add_frame(pair.second.clone());
+  tracker.mesh().validate(true);
+  EXPECT_EQ(r.components, std::size_t(want_components));
+  EXPECT_EQ(r.euler, want_euler);
 }
 
 }  // namespace
