@@ -28,6 +28,7 @@ std::vector<Binding> bindings(TrackerParams& p) {
       {"tracker.edge_length", &p.edge_length, -inf, inf},
       {"tracker.voxel_size_factor", &p.voxel_size_factor, 1e-3, 1e3},
       {"tracker.voxel_size", &p.voxel_size, 0, inf},
+      {"tracker.extraction_grid", &p.extraction_grid},
       {"tracker.sdf_half_width", &p.sdf_half_width, 1.75, 64},  // below √3 cells lose corner values
       {"tracker.topology_tolerance", &p.topology_tolerance, 0, 2},
       {"tracker.small_component_voxels", &p.small_component_voxels, 0, 1e6},

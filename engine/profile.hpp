@@ -28,6 +28,10 @@ struct TrackerParams {
   //! extraction's own sign pattern and see every tunnel and bridge the input has, however thin (resurfaced
   //! pcow, docs/results.md, 2026-11-25 late).
   double voxel_size = 0;
+  //! With voxel_size 0: when the first frame's vertices lie on the edges of one grid (extraction_grid_spacing,
+  //! kernels/sdf/extraction_grid.hpp), the first lattice is that grid at half its spacing; otherwise, with a
+  //! warning in the first frame's report, voxel_size_factor × L as without it.
+  bool extraction_grid = false;
   //! ConstrainTopology(M, φ_S) tolerance, in voxels: at lattice nodes within this distance of both M and
   //! S, φ_S takes M's sign (see agree_near_surface in tracker.cpp), so alignment error below it causes no
   //! resampling. 0 is the paper's exact rule; then every node that M and S put on different sides makes

@@ -11,6 +11,7 @@
 #include "kernels/propagate/propagate.hpp"
 #include "kernels/raycast/target_surface.hpp"
 #include "kernels/registration/projection.hpp"
+#include "kernels/sdf/extraction_grid.hpp"
 #include "kernels/sdf/marching_cubes.hpp"
 #include "kernels/sdf/signed_distance.hpp"
 
@@ -110,6 +111,14 @@ struct Tracker::Impl {
     if (!(edge_length > 0)) TT_THROW(InvalidInput, "the first frame has no edges to derive the edge length from");
     mesh = std::move(target);
     voxel_size = first_voxel_size(params, edge_length);
+    if (params.extraction_grid && !(params.voxel_size > 0)) {
+      const auto r = extraction_grid_spacing(mesh.positions(), mean_edge_length(mesh));
+      if (r) voxel_size = 0.5 * *r;
+      else
+        report.warnings.push_back("tracker.extraction_grid: the first frame's vertices do not lie on the edges of "
+                                  "one grid with nodes at multiples of its spacing; voxels of " +
+                                  std::to_string(voxel_size) + " (voxel_size_factor x L) used");
+    }
     improve(nullptr);
   }
 

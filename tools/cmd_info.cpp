@@ -4,6 +4,7 @@
 #include <nlohmann/json.hpp>
 
 #include "kernels/mesh/soup_stats.hpp"
+#include "kernels/sdf/extraction_grid.hpp"
 #include "tools/cli_common.hpp"
 #include "tools/commands.hpp"
 
@@ -15,7 +16,15 @@ struct InfoOptions {
   bool json = false;
 };
 
-nlohmann::json to_json(const InputFrame& f, const SoupStats& s) {
+//! The spacing of the grid the frame was extracted on, 0 when it was not (kernels/sdf/extraction_grid.hpp).
+double grid_spacing(const MeshData& mesh, const SoupStats& s) {
+  std::vector<Vec3> points(mesh.positions.size());
+  for (std::size_t i = 0; i < points.size(); ++i)
+    points[i] = Vec3(mesh.positions[i][0], mesh.positions[i][1], mesh.positions[i][2]);
+  return extraction_grid_spacing(points, s.edge_length.mean).value_or(0.0);
+}
+
+nlohmann::json to_json(const InputFrame& f, const SoupStats& s, double grid) {
   nlohmann::json j;
   j["file"] = f.path.string();
   if (f.number >= 0) j["frame"] = f.number;
@@ -39,6 +48,7 @@ nlohmann::json to_json(const InputFrame& f, const SoupStats& s) {
                       {"max", s.edge_length.max}};
   j["min_angle_deg"] = s.min_angle_deg;
   j["share_min_angle_below_10deg"] = s.share_below_10deg;
+  j["extraction_grid"] = grid > 0 ? nlohmann::json(grid) : nlohmann::json();  // tracker.voxel_size: half of it
   return j;
 }
 
@@ -60,20 +70,24 @@ void run_info(const InfoOptions& opt) {
   const auto frames = resolve_frames(opt.inputs);
   nlohmann::json all = nlohmann::json::array();
   if (!opt.json)
-    std::printf("%-28s %9s %9s %5s %6s %5s  %-24s %10s %30s %8s %6s\n", "file", "vertices", "triangles", "comp",
-                "euler", "genus", "status", "bbox-diag", "edge length min/mean/max", "min-ang", "<10deg");
+    std::printf("%-28s %9s %9s %5s %6s %5s  %-24s %10s %30s %8s %6s %10s\n", "file", "vertices", "triangles", "comp",
+                "euler", "genus", "status", "bbox-diag", "edge length min/mean/max", "min-ang", "<10deg", "grid");
   for (const auto& f : frames) {
-    const SoupStats s = analyze_soup(load_mesh_data(f.path));
+    const MeshData mesh = load_mesh_data(f.path);
+    const SoupStats s = analyze_soup(mesh);
+    const double grid = grid_spacing(mesh, s);
     if (opt.json) {
-      all.push_back(to_json(f, s));
+      all.push_back(to_json(f, s, grid));
       continue;
     }
     char edges[64];
     std::snprintf(edges, sizeof edges, "%.4g/%.4g/%.4g", s.edge_length.min, s.edge_length.mean, s.edge_length.max);
     const std::string genus = s.genus >= 0 ? std::to_string(s.genus) : "-";
-    std::printf("%-28s %9zu %9zu %5zu %6ld %5s  %-24s %10.4g %30s %8.2f %5.1f%%\n",
+    char grid_text[32] = "-";
+    if (grid > 0) std::snprintf(grid_text, sizeof grid_text, "%.7g", grid);
+    std::printf("%-28s %9zu %9zu %5zu %6ld %5s  %-24s %10.4g %30s %8.2f %5.1f%% %10s\n",
                 f.path.filename().string().c_str(), s.vertices, s.triangles, s.components, s.euler, genus.c_str(),
-                status(s).c_str(), s.bbox.diagonal(), edges, s.min_angle_deg, 100.0 * s.share_below_10deg);
+                status(s).c_str(), s.bbox.diagonal(), edges, s.min_angle_deg, 100.0 * s.share_below_10deg, grid_text);
   }
   if (opt.json) std::cout << all.dump(2) << "\n";
 }
@@ -84,7 +98,8 @@ namespace {
 void add_info_command(CLI::App& app) {
   auto opt = std::make_shared<InfoOptions>();
   CLI::App* sub = app.add_subcommand("info", "Print vertices, triangles, components, Euler characteristic, genus, "
-                                             "closedness, bounding box and quality of each frame");
+                                             "closedness, bounding box and quality of each frame, and the spacing of the grid "
+                                             "it was extracted on when its vertices lie on one (tracker.voxel_size)");
   sub->add_option("INPUT", opt->inputs, "mesh files (OBJ, PLY), folders, globs or frame patterns")->required();
   sub->add_flag("--json", opt->json, "machine-readable JSON instead of a table");
   sub->callback([opt] { run_info(*opt); });

@@ -105,7 +105,7 @@ TEST(TrackerRealData, CaptureProfileRefinesTheLatticeForAHandleItMisses) {
 // of frame 16 onto it on the capture profile's first lattice (half the mean edge length) or half of that gives
 // another topology. On the grid the frame was extracted on, or half its spacing, the nodes sample the
 // extraction's own signs and the result has frame 17's components and Euler characteristic
-// (tracker.voxel_size).
+// (tracker.voxel_size, or tracker.extraction_grid to find the grid in the first frame).
 TEST(TrackerRealData, TheExtractionGridGivesTheInputsTopology) {
   if (!have_pcow()) GTEST_SKIP() << "no pcow data";
   const ResurfacedPair pair = resurfaced_pcow_pair(16);
@@ -140,6 +140,16 @@ TEST(TrackerRealData, TheExtractionGridGivesTheInputsTopology) {
   tracker.mesh().validate(true);
   EXPECT_EQ(r.components, std::size_t(want_components));
   EXPECT_EQ(r.euler, want_euler);
+
+  // tracker.extraction_grid finds that grid in the first frame's vertices and takes half its spacing.
+  TrackerParams q = capture;
+  apply_setting(q, "tracker.extraction_grid=true");
+  Tracker found(q);
+  EXPECT_TRUE(found.add_frame(pair.first).warnings.empty());
+  EXPECT_NEAR(found.voxel_size(), 0.5 * pair.grid_spacing, 1e-6 * pair.grid_spacing);
+  const FrameReport rq = found.add_frame(pair.second);
+  EXPECT_EQ(rq.components, std::size_t(want_components));
+  EXPECT_EQ(rq.euler, want_euler);
 }
 
 }  // namespace

@@ -276,6 +276,27 @@ TrackerParams coarse_lattice(int refinements) {
   return p;
 }
 
+TEST(Tracker, ExtractionGridFoundOrAWarning) {
+  TrackerParams p = coarse_lattice(0);  // voxels of 0.1 without the grid
+  p.extraction_grid = true;
+  {  // Marching cubes on a grid of 0.01: the first lattice is that grid at half its spacing.
+    Tracker tracker(p);
+    EXPECT_TRUE(tracker.add_frame(spheres_with_gap(0.02, 0.08, 0)).warnings.empty());
+    EXPECT_NEAR(tracker.voxel_size(), 0.005, 1e-9);
+  }
+  {  // An icosphere's own triangles lie on no grid: a warning, and voxel_size_factor × L.
+    Tracker tracker(p);
+    const FrameReport& r = tracker.add_frame(test::icosphere(4, 0.5).mesh());
+    ASSERT_EQ(r.warnings.size(), 1u);
+    EXPECT_NE(r.warnings[0].find("tracker.extraction_grid"), std::string::npos) << r.warnings[0];
+    EXPECT_DOUBLE_EQ(tracker.voxel_size(), 0.1);
+  }
+  p.voxel_size = 0.07;  // tracker.voxel_size comes first
+  Tracker fixed(p);
+  EXPECT_TRUE(fixed.add_frame(spheres_with_gap(0.02, 0.08, 0)).warnings.empty());
+  EXPECT_DOUBLE_EQ(fixed.voxel_size(), 0.07);
+}
+
 TEST(Tracker, RefinesTheLatticeWhereItMissesTheInputsTopology) {
   // A gap from 0.02 to 0.08 holds no node of the 0.1 lattice, but the node 0.05 of the halved one.
   std::vector<SurfaceMesh> frames;
