@@ -45,9 +45,7 @@ TrackerParams align_params(const AlignOptions& opt) {
 
 TargetSurface load_target(const std::string& path) {
   const MeshData data = load_mesh_data(path);
-  std::vector<Vec3> positions(data.positions.size());
-  for (std::size_t i = 0; i < positions.size(); ++i)
-    positions[i] = Vec3(data.positions[i][0], data.positions[i][1], data.positions[i][2]);
+  const std::vector<Vec3> positions = positions_of(data);
   std::vector<std::array<Index, 3>> triangles(data.triangles.size());
   for (std::size_t f = 0; f < triangles.size(); ++f)
     for (int c = 0; c < 3; ++c) {

@@ -3,6 +3,7 @@
 #include <iostream>
 #include <nlohmann/json.hpp>
 
+#include "kernels/mesh/mesh_convert.hpp"
 #include "kernels/mesh/soup_stats.hpp"
 #include "kernels/sdf/extraction_grid.hpp"
 #include "tools/cli_common.hpp"
@@ -18,10 +19,7 @@ struct InfoOptions {
 
 //! The spacing of the grid the frame was extracted on, 0 when it was not (kernels/sdf/extraction_grid.hpp).
 double grid_spacing(const MeshData& mesh, const SoupStats& s) {
-  std::vector<Vec3> points(mesh.positions.size());
-  for (std::size_t i = 0; i < points.size(); ++i)
-    points[i] = Vec3(mesh.positions[i][0], mesh.positions[i][1], mesh.positions[i][2]);
-  return extraction_grid_spacing(points, s.edge_length.mean).value_or(0.0);
+  return extraction_grid_spacing(positions_of(mesh), s.edge_length.mean).value_or(0.0);
 }
 
 nlohmann::json to_json(const InputFrame& f, const SoupStats& s, double grid) {

@@ -4,6 +4,7 @@
 #include <chrono>
 
 #include "kernels/gen/fill_voids.hpp"
+#include "kernels/mesh/mesh_convert.hpp"
 #include "kernels/sdf/marching_cubes.hpp"
 #include "kernels/sdf/signed_distance.hpp"
 
@@ -11,9 +12,7 @@ namespace topotrack {
 
 MeshData resurface(const MeshData& source, const ResurfaceParams& params, ResurfaceReport* report) {
   using Clock = std::chrono::steady_clock;
-  std::vector<Vec3> positions(source.positions.size());
-  for (std::size_t i = 0; i < positions.size(); ++i)
-    positions[i] = Vec3(source.positions[i][0], source.positions[i][1], source.positions[i][2]);
+  const std::vector<Vec3> positions = positions_of(source);
   std::vector<std::array<Index, 3>> triangles(source.triangles.size());
   for (std::size_t f = 0; f < triangles.size(); ++f)
     for (int j = 0; j < 3; ++j) {

@@ -98,4 +98,11 @@ MeshData to_mesh_data(const SurfaceMesh& mesh, bool with_properties) {
   return d;
 }
 
+std::vector<Vec3> positions_of(const MeshData& data) {
+  std::vector<Vec3> positions(data.positions.size());
+  for (std::size_t i = 0; i < positions.size(); ++i)
+    positions[i] = Vec3(data.positions[i][0], data.positions[i][1], data.positions[i][2]);
+  return positions;
+}
+
 }  // namespace topotrack

@@ -11,6 +11,9 @@ namespace topotrack {
 //! and duplicate ids. The message does not name a file: callers prefix it.
 SurfaceMesh to_surface_mesh(const MeshData& data);
 
+//! The positions of `data` as Vec3 (no check; to_surface_mesh checks them).
+std::vector<Vec3> positions_of(const MeshData& data);
+
 //! Flat arrays of the live elements of `mesh` (deleted ones skipped, vertices in handle order), with
 //! ids and, when `with_properties`, every float vertex property as an attribute.
 MeshData to_mesh_data(const SurfaceMesh& mesh, bool with_properties = true);
