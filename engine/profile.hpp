@@ -30,7 +30,9 @@ struct TrackerParams {
   double voxel_size = 0;
   //! With voxel_size 0: when the first frame's vertices lie on the edges of one grid (extraction_grid_spacing,
   //! kernels/sdf/extraction_grid.hpp), the first lattice is that grid at half its spacing; otherwise, with a
-  //! warning in the first frame's report, voxel_size_factor × L as without it.
+  //! warning in the first frame's report, voxel_size_factor × L as without it. On that grid a frame whose
+  //! topology differs from the input's after lines 8-12 has them redone once on the same lattice with line
+  //! 11's sign flips keeping φ_S's topology (before any of topology_refinements; engine/tracker.cpp).
   bool extraction_grid = false;
   //! ConstrainTopology(M, φ_S) tolerance, in voxels: at lattice nodes within this distance of both M and
   //! S, φ_S takes M's sign (see agree_near_surface in tracker.cpp), so alignment error below it causes no

@@ -36,6 +36,13 @@ struct Tracker::Impl {
   std::size_t frames = 0;
   double edge_length = 0, voxel_size = 0;
 
+  //! Whether the first lattice is the half-spacing lattice of the first frame's extraction grid
+  //! (TrackerParams::extraction_grid found one). Derived from the state a checkpoint restores.
+  bool lattice_on_extraction_grid() const {
+    return params.extraction_grid && !(params.voxel_size > 0) && voxel_size > 0 &&
+           voxel_size != first_voxel_size(params, edge_length);
+  }
+
   ImproveParams improve_params() const {
     ImproveParams p = params.improve;
     p.target_edge_length = edge_length;
@@ -125,8 +132,9 @@ struct Tracker::Impl {
   //! Lines 8-12 of Algorithm 1 on a lattice of voxel size h: ConstrainTopology against φ_M and φ_S (§4.3),
   //! the small components (engine/small_components.hpp), then ImproveMesh(M). φ_S takes φ_M's sign where the
   //! two surfaces pass within `agree_within` of a node and the flip keeps φ_S's topology (agree_near_surface;
-  //! 0: never). `self` runs line 9; a refinement (below) leaves it out.
-  void topology_lines(PreparedFrame& frame, double h, bool self, double agree_within) {
+  //! 0: never). `self` runs line 9; a refinement (below) leaves it out. `keep`: line 11's flips keep φ_S's
+  //! topology on the first lattice too.
+  void topology_lines(PreparedFrame& frame, double h, bool self, double agree_within, bool keep = false) {
     const SurfaceMesh& target = frame.surface;
     openvdb::FloatGrid::Ptr phi_m;
     if (mesh.n_faces() > 0 && (self || agree_within > 0)) {
@@ -147,9 +155,10 @@ struct Tracker::Impl {
     // lattice (a refinement, which is there to give M S_n's topology) only where that keeps φ_S's topology.
     // With the check on the first lattice too, resurfaced pcow matched the input's topology in 5 of 40
     // frames with the default profile instead of 7 and samba in 36 instead of 38 (docs/results.md,
-    // 2026-11-25).
+    // 2026-11-25). On the input's extraction grid refined_topology_lines redoes the first lattice with the
+    // check when the topology differs.
     phi_m.reset();  // not needed any more: its memory is free for the cut
-    report.complex_cells_target = constrain(*phi_s, h, report.complex_reasons_target, !self);
+    report.complex_cells_target = constrain(*phi_s, h, report.complex_reasons_target, !self || keep);
     report.small_components_added = report.small_components_removed = 0;
     if (params.small_component_voxels > 0 && target.n_faces() > 0) {
       const auto t0 = Clock::now();
@@ -181,6 +190,22 @@ struct Tracker::Impl {
     const auto matches = [&] {
       return connected_components(mesh) == want_components && euler_characteristic(mesh) == want_euler;
     };
+    // On the input's extraction grid φ_S's signs are the input's topology, but a marching-cubes vertex at the
+    // middle of a grid edge is a node of the half-spacing lattice with |φ_S| ≈ 0, and its flip to M's side in
+    // line 11 can cut a neck the input has (resurfaced pcow frames 28 and 30, capture profile: a bulge cut
+    // off as a component). There lines 8-12 are redone on the same lattice with line 11's flips keeping φ_S's
+    // topology before any finer lattice is tried. Keeping them in every frame's first pass instead matched all
+    // 40 frames too but left a fold in 3; redoing the first lattice from its result (without line 9) did
+    // not mend frame 30 (docs/results.md, 2026-11-25 night).
+    const bool redo_first = lattice_on_extraction_grid();
+    SurfaceMesh before;
+    EventList before_events;
+    FrameReport before_report;
+    if (redo_first) {
+      before = mesh.clone();
+      before_events = events;
+      before_report = report;
+    }
     topology_lines(frame, voxel_size, true, params.topology_tolerance * voxel_size);
     if (matches()) return;
     const QualityStats first = quality_stats(mesh);
@@ -190,6 +215,25 @@ struct Tracker::Impl {
     SurfaceMesh kept = std::move(mesh);
     EventList kept_events = std::move(events);
     const FrameReport kept_report = report;
+    if (redo_first) {
+      const StageSeconds seconds = report.seconds;
+      mesh = std::move(before);
+      events = std::move(before_events);
+      report = std::move(before_report);
+      report.seconds = seconds;
+      report.topology_retries = 1;
+      topology_lines(frame, voxel_size, true, params.topology_tolerance * voxel_size, true);
+      if (matches() && !worse(quality_stats(mesh))) return;
+      if (matches()) report.topology_rejected_for_quality = 1;
+      const StageSeconds redo_seconds = report.seconds;
+      const int retries = report.topology_retries, rejected = report.topology_rejected_for_quality;
+      mesh = kept.clone();
+      events = kept_events;
+      report = kept_report;
+      report.seconds = redo_seconds;
+      report.topology_retries = retries;
+      report.topology_rejected_for_quality = rejected;
+    }
     double h = voxel_size;
     for (int level = 1; level <= params.topology_refinements; ++level) {
       mesh = kept.clone();
@@ -250,7 +294,7 @@ struct Tracker::Impl {
     if (mesh.n_faces() > 0) improve(&events);  // line 7
     if (!params.topology) {
       if (mesh.n_faces() > 0) improve(&events);  // line 12
-    } else if (params.topology_refinements <= 0 || target.n_faces() == 0) {
+    } else if ((params.topology_refinements <= 0 && !lattice_on_extraction_grid()) || target.n_faces() == 0) {
       topology_lines(frame, voxel_size, true, params.topology_tolerance * voxel_size);
     } else {
       refined_topology_lines(frame);

@@ -111,7 +111,17 @@ public:
       else
         survey_touched(s);
       rep_.seconds_scan += since(t0);
-      if (s.empty() && unfixed_.empty() && unfixed_short_.empty()) break;
+      if (s.empty() && unfixed_.empty() && unfixed_short_.empty()) {
+        // relax_pass forgets the triangles and short edges it could not fix, and survey_touched sees only what
+        // the last round touched: once a relaxation has run, the last resort below is checked on a full
+        // survey before stopping too. Without this a call could stop with a triangle below kVeryBadAngleDeg
+        // that a second call removed at once (resurfaced pcow frame 3, capture profile on the extraction grid:
+        // a 0.6° triangle; docs/results.md, 2026-11-25 night).
+        if (!relaxed_ || last_resort_) break;
+        survey_all(s);
+        if (!any_below(s.bad_faces, q_very_bad_)) break;
+        last_resort_ = true;
+      }
       rep_.iterations = it + 1;
       std::size_t ops = 0;
       t0 = Clock::now();
@@ -131,6 +141,7 @@ public:
         t0 = Clock::now();
         ops = p_.enable_relaxation ? relax_pass() : 0;
         rep_.seconds_bad_triangles += since(t0);
+        relaxed_ = relaxed_ || ops > 0;
         if (ops > 0) continue;
         // The last resort for a triangle below kVeryBadAngleDeg that nothing removed (a full survey finds
         // it), from the next round on: crease collapses judged by the two-ring (crease_collapse_ok) and
@@ -1089,6 +1100,7 @@ private:
   std::vector<Index> touched_, local_edges_, local_faces_;
   std::vector<Index> unfixed_;  // bad triangles that no flip or collapse fixed since the last relax_pass
   std::vector<std::pair<Index, Index>> unfixed_short_;  // short edges (end points) no collapse removed
+  bool relaxed_ = false;      // relax_pass moved a vertex (run)
   bool last_resort_ = false;  // a fixed point with a triangle below kVeryBadAngleDeg was reached (run)
   std::vector<std::uint8_t> vtouched_;
   std::vector<std::uint32_t> estamp_, fstamp_;

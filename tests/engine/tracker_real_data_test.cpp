@@ -6,6 +6,7 @@
 
 #include <cstdio>
 #include <filesystem>
+#include <vector>
 
 #include "engine/profile.hpp"
 #include "engine/tracker.hpp"
@@ -28,25 +29,35 @@ bool have_pcow() {
   return std::filesystem::exists(std::filesystem::path(TOPOTRACK_SHARED_DIR) / "data" / "pcow" / "pcow.0002.ply");
 }
 
-struct ResurfacedPair {
-  SurfaceMesh first, second;
-  double grid_spacing = 0;  //!< the voxel size `gen resurface` extracted them at
-};
-
-//! Resurfaced pcow frames `start` and `start` + 1, as `topotrack gen resurface ../shared/data/pcow --frames 2
-//! --start START` makes them.
-ResurfacedPair resurfaced_pcow_pair(long start) {
+//! Resurfaced pcow frames `start` to `start` + `count` - 1, as `topotrack gen resurface ../shared/data/pcow
+//! --frames COUNT --start START` makes them; `grid_spacing` gets the voxel size they were extracted at.
+std::vector<SurfaceMesh> resurfaced_pcow_frames(long start, long count, double& grid_spacing) {
   const std::filesystem::path dir =
       std::filesystem::temp_directory_path() / ("topotrack_tracker_real_" + std::to_string(::getpid()));
   GenParams g;
   g.kind = "resurface";
   g.source = (std::filesystem::path(TOPOTRACK_SHARED_DIR) / "data" / "pcow").string();
-  g.frames = 2;
+  g.frames = count;
   g.start = start;
   const GenReport report = generate_sequence(g, dir);
-  ResurfacedPair pair{to_surface_mesh(read_mesh(dir / report.frames.at(0).file)),
-                      to_surface_mesh(read_mesh(dir / report.frames.at(1).file)), report.voxel_size};
+  std::vector<SurfaceMesh> frames;
+  for (const auto& f : report.frames) frames.push_back(to_surface_mesh(read_mesh(dir / f.file)));
+  grid_spacing = report.voxel_size;
   std::filesystem::remove_all(dir);
+  return frames;
+}
+
+struct ResurfacedPair {
+  SurfaceMesh first, second;
+  double grid_spacing = 0;  //!< the voxel size `gen resurface` extracted them at
+};
+
+//! Resurfaced pcow frames `start` and `start` + 1.
+ResurfacedPair resurfaced_pcow_pair(long start) {
+  ResurfacedPair pair;
+  std::vector<SurfaceMesh> frames = resurfaced_pcow_frames(start, 2, pair.grid_spacing);
+  pair.first = std::move(frames.at(0));
+  pair.second = std::move(frames.at(1));
   return pair;
 }
 
@@ -150,6 +161,52 @@ TEST(TrackerRealData, TheExtractionGridGivesTheInputsTopology) {
   const FrameReport rq = found.add_frame(pair.second);
   EXPECT_EQ(rq.components, std::size_t(want_components));
   EXPECT_EQ(rq.euler, want_euler);
+}
+
+// Resurfaced pcow frames 2 -> 3 (of `gen resurface --frames 3`) with the capture profile on the grid they were
+// extracted on (tracker.extraction_grid).
+// Line 11 lets lattice nodes within a tenth of a voxel of φ_S's zero set take M's side; on the half-spacing lattice
+// a marching-cubes vertex at the middle of a grid edge is such a node, and its flip cuts what the input has there,
+// so the first pass gives another topology than frame 3's. The tracker then redoes lines 8-12 on the same lattice
+// with those flips keeping φ_S's topology, and gets frame 3's (resurfaced pcow, 40 frames: 40 of 40 instead of 38).
+TEST(TrackerRealData, OnTheExtractionGridTheFirstLatticeIsRedoneKeepingTheInputsTopology) {
+  if (!have_pcow()) GTEST_SKIP() << "no pcow data";
+  double spacing = 0;
+  std::vector<SurfaceMesh> frames = resurfaced_pcow_frames(1, 3, spacing);  // the grid spans the frames made
+  const ResurfacedPair pair{std::move(frames.at(1)), std::move(frames.at(2)), spacing};
+  const Index want_components = connected_components(pair.second);
+  const long want_euler = euler_characteristic(pair.second);
+  TrackerParams p = load_profile("capture");
+  apply_setting(p, "tracker.extraction_grid=true");
+  Tracker tracker(p);
+  EXPECT_TRUE(tracker.add_frame(pair.first.clone()).warnings.empty());
+  const FrameReport r = tracker.add_frame(pair.second.clone());
+  tracker.mesh().validate(true);
+  const QualityStats q = quality_stats(tracker.mesh());
+  std::printf("frame 3: components %zu (input %ld), Euler %ld (%ld), retries %d, level %d, min angle %.2f deg, "
+              "min dihedral %.1f deg\n",
+              r.components, long(want_components), r.euler, want_euler, r.topology_retries, r.topology_level,
+              q.min_angle_deg, q.min_dihedral_deg);
+  EXPECT_EQ(r.components, std::size_t(want_components));
+  EXPECT_EQ(r.euler, want_euler);
+  EXPECT_EQ(r.topology_retries, 1) << "the first pass misses frame 3's topology; the redo on the same lattice gets it";
+  EXPECT_EQ(r.topology_level, 0);
+  EXPECT_EQ(q.below_2deg, 0u);
+  EXPECT_EQ(q.dihedral_below_45deg, 0u);
+
+  // The first pass alone: the same lattice given as tracker.voxel_size (no redo there) and no finer lattice.
+  TrackerParams first_only = load_profile("capture");
+  char setting[64];
+  std::snprintf(setting, sizeof setting, "tracker.voxel_size=%.17g", tracker.voxel_size());
+  apply_setting(first_only, setting);
+  first_only.topology_refinements = 0;
+  Tracker plain(first_only);
+  plain.add_frame(pair.first.clone());
+  EXPECT_EQ(plain.voxel_size(), tracker.voxel_size());
+  const FrameReport r0 = plain.add_frame(pair.second.clone());
+  std::printf("first pass alone: components %zu, Euler %ld\n", r0.components, r0.euler);
+  EXPECT_NE(std::make_pair(r0.components, r0.euler), std::make_pair(std::size_t(want_components), want_euler))
+      << "the case this test is about";
 }
 
 }  // namespace
