@@ -215,6 +215,18 @@ struct Tracker::Impl {
     SurfaceMesh kept = std::move(mesh);
     EventList kept_events = std::move(events);
     const FrameReport kept_report = report;
+    // Back to the first result with its report, except the seconds and counts of every attempt so far; `last`:
+    // for good (the first result is moved, not copied).
+    const auto restore_first = [&](bool last) {
+      const StageSeconds seconds = report.seconds;
+      const int retries = report.topology_retries, rejected = report.topology_rejected_for_quality;
+      mesh = last ? std::move(kept) : kept.clone();
+      events = last ? std::move(kept_events) : kept_events;
+      report = kept_report;
+      report.seconds = seconds;
+      report.topology_retries = retries;
+      report.topology_rejected_for_quality = rejected;
+    };
     if (redo_first) {
       const StageSeconds seconds = report.seconds;
       mesh = std::move(before);
@@ -225,14 +237,7 @@ struct Tracker::Impl {
       topology_lines(frame, voxel_size, true, params.topology_tolerance * voxel_size, true);
       if (matches() && !worse(quality_stats(mesh))) return;
       if (matches()) report.topology_rejected_for_quality = 1;
-      const StageSeconds redo_seconds = report.seconds;
-      const int retries = report.topology_retries, rejected = report.topology_rejected_for_quality;
-      mesh = kept.clone();
-      events = kept_events;
-      report = kept_report;
-      report.seconds = redo_seconds;
-      report.topology_retries = retries;
-      report.topology_rejected_for_quality = rejected;
+      restore_first(false);
     }
     double h = voxel_size;
     for (int level = 1; level <= params.topology_refinements; ++level) {
@@ -256,14 +261,7 @@ struct Tracker::Impl {
     }
     // No finer lattice gave S_n's topology with no worse quality: the first result stays, with its report
     // (the seconds count every attempt).
-    mesh = std::move(kept);
-    events = std::move(kept_events);
-    const StageSeconds seconds = report.seconds;
-    const int retries = report.topology_retries, rejected = report.topology_rejected_for_quality;
-    report = kept_report;
-    report.seconds = seconds;
-    report.topology_retries = retries;
-    report.topology_rejected_for_quality = rejected;
+    restore_first(true);
   }
 
   void next_frame(PreparedFrame& frame) {
