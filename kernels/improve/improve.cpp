@@ -41,6 +41,8 @@ constexpr double kRelaxGainMin = 1e-3;
 // Above this smallest-angle sine (about 0.57°) a triangle whose edges are long against the float spacing of
 // its coordinates cannot become degenerate by rounding to float.
 constexpr double kRoundingSafeQuality = 1e-2;
+// The least gain in the sharpest crease of a star for a move that softens a fold it cannot remove (soften_fold).
+constexpr double kSoftenGainDeg = 0.5;
 // Bisection steps that refine the shortest move removing a fold (fold_pass).
 constexpr int kUnfoldBisections = 5;
 // Tolerance on the cosine of the sharpest crease for a move that keeps the planes of the faces at a crease.
@@ -720,7 +722,8 @@ private:
   //! Whether moving the centre of star_ to q inverts no triangle, makes none degenerate, keeps its edges
   //! within L_max and adds no fold nor sharpens a crease beyond min_dihedral; *new_q: the smallest
   //! quality of the moved triangles.
-  bool star_move_ok(const Vec3& q, double* new_q, int* folds_removed = nullptr, double crease_slack = 0) {
+  bool star_move_ok(const Vec3& q, double* new_q, int* folds_removed = nullptr, double crease_slack = 0,
+                    std::pair<double, double>* worst = nullptr) {
     *new_q = 1;
     for (StarFace& s : star_) {
       const Vec3 &q1 = pos(s.w1), &q2 = pos(s.w2);
@@ -751,6 +754,7 @@ private:
       }
     }
     if (folds_removed) *folds_removed = old_folds - new_folds;
+    if (worst) *worst = {old_worst, new_worst};
     return !(new_worst < cos_fold_ && (new_worst < old_worst - crease_slack || new_folds > old_folds));
   }
 
@@ -984,6 +988,44 @@ private:
     }
   }
 
+  //! The last resort for a fold on a crease sharper than min_dihedral that runs across several edges
+  //! (the input's own crease, sampled by a mesh at another resolution): every removal above folds the next
+  //! edge along the crease. Soften the crease instead: of the moves of a corner of the fold's faces towards
+  //! the centroid of its one-ring (a sixteenth of the way up to the whole), the one that leaves the sharpest
+  //! crease of its star the least sharp, if that is at least kSoftenGainDeg less sharp than before, keeps the
+  //! smallest angle (min_angle or what it was) and moves the surface by at most max_operation_deviation. It
+  //! may fold an edge beside the old fold, but never as sharply as the new sharpest crease: each move raises
+  //! the sharpest crease it touches, so the rounds that follow cannot cycle, and they remove those folds as
+  //! any other. On resurfaced pcow frame 19 (capture profile on the extraction grid): a 33.5° fold beside
+  //! the input's 51.6° crease, where each removal added a fold, gone after one such move and one collapse
+  //! (docs/results.md, 2026-11-25, later).
+  void soften_fold(Edge e, FoldFix& best) {
+    const Halfedge h0 = m_.halfedge(e, 0), h1 = m_.halfedge(e, 1);
+    double best_worst = -2;
+    for (const Vertex v : {m_.to_vertex(m_.next(h0)), m_.to_vertex(m_.next(h1)), m_.to_vertex(h0), m_.to_vertex(h1)}) {
+      Vec3 centroid, normal;
+      double old_q = 1;
+      if (!gather_star(v, centroid, normal, old_q)) continue;
+      const Vec3 p0 = pos(v), d = centroid - p0;
+      const double q_keep = std::min(old_q, q_min_);
+      for (const double t : {0.0625, 0.125, 0.25, 0.5, 1.0}) {
+        const Vec3 q = p0 + t * d;
+        double new_q = 1;
+        std::pair<double, double> worst{1, -2};  // stays so where the move inverts or degenerates a triangle
+        star_move_ok(q, &new_q, nullptr, 0, &worst);  // its verdict on folds is the one not wanted here
+        const auto [old_worst, new_worst] = worst;
+        if (new_q < q_keep || new_worst <= best_worst ||
+            !(std::acos(std::clamp(old_worst, -1.0, 1.0)) - std::acos(std::clamp(new_worst, -1.0, 1.0)) >=
+              kSoftenGainDeg * kDegToRad))
+          continue;
+        const double dev = star_deviation(p0, q);
+        if (dev > op_dev_) continue;
+        best_worst = new_worst;
+        best = {dev, v, q, Edge()};
+      }
+    }
+  }
+
   //! Slide c straight towards `end`, a corner of a face of c (so that face keeps its plane), 0.4 of the way
   //! or less, if no edge of c gets shorter than L_min, no crease gets sharper, no triangle gets a new angle
   //! below min_angle and the surface moves by at most half of max_operation_deviation; adds the move to
@@ -1050,7 +1092,8 @@ private:
   //! angles down to 20°), the first removal that could go moved the surface by 0.5 L, the gentlest collapse
   //! by plane distances still by 0.45 L, this choice by 0.24 L (frame 3: 0.0029, 0.0025, 0.0013 of the
   //! diagonal); never more than max_surface_deviation. Where none of these can go, an outward move
-  //! (inflate_fold); where that fails too, unblock a valence-3 corner first.
+  //! (inflate_fold); where that fails too, a move that softens the crease (soften_fold); where nothing can,
+  //! unblock a valence-3 corner first.
   std::size_t fold_pass(const Candidates& c) {
     std::size_t n = 0;
     for (const auto& [key, ei] : c) {
@@ -1067,6 +1110,7 @@ private:
       if (p_.enable_relaxation && best.dev > op_dev_) prepare_knife_edge(e, edges, best);
       if (!best.v.is_valid() && !best.e.is_valid()) best = gentlest_fold_fix(e, edges, false);
       if (!best.v.is_valid() && !best.e.is_valid() && p_.enable_relaxation) inflate_fold(e, best);
+      if (!best.v.is_valid() && !best.e.is_valid() && p_.enable_relaxation) soften_fold(e, best);
       if (best.v.is_valid()) {
         move_vertex(best.v, best.q);
         ++n;

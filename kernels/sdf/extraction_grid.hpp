@@ -18,7 +18,9 @@ namespace topotrack {
 //! (coordinates merely rounded to a fixed number of decimals), and r must lie within [0.1, 10] × `edge_length`
 //! (the mesh's mean edge length; <= 0: not checked). A grid with another origin is not recognised. The
 //! spacing is the largest divisor (by 1 to 8) of the smallest gap between the most frequent coordinate values
-//! that passes. Nothing for a non-finite coordinate. O(n log n).
+//! that passes; where none does (flat faces off the grid's planes, a tank's walls, recur more than any lattice
+//! plane), the largest spacing that passes among the divisors of the gaps between the 16 most frequent values
+//! of each axis. Nothing for a non-finite coordinate. O(n log n).
 std::optional<double> extraction_grid_spacing(std::span<const Vec3> points, double edge_length);
 
 }  // namespace topotrack

@@ -8,6 +8,7 @@
 #include "kernels/gen/synthetic.hpp"
 #include "kernels/mesh/mesh_convert.hpp"
 #include "kernels/mesh/mesh_queries.hpp"
+#include "kernels/sdf/extraction_grid.hpp"
 
 namespace topotrack {
 namespace {
@@ -82,6 +83,26 @@ TEST(Splash, TopologyChangesOnCue) {
   EXPECT_GE(components_at(scene, 46), 10);  // rim droplets in flight (t 0.45)
   EXPECT_GE(components_at(scene, 81), 2);   // the jet's drop in flight (t 0.80)
   EXPECT_EQ(components_at(scene, 101), 1);  // everything fell back (t 1)
+}
+
+// The tracker finds the grid a frame was extracted on (tracker.extraction_grid) from the coordinates its
+// vertices share. The pool's flat walls and floor, off the grid's planes, share theirs far more often than any
+// lattice plane does: the spacing must still be found, in the first frame (the drop above a still pool) as in
+// the crown's.
+TEST(Splash, FramesAreRecognisedAsExtractedOnTheirGrid) {
+  SyntheticParams p;
+  p.kind = SyntheticKind::kSplash;
+  p.frames = 60;
+  const SyntheticScene scene(p);
+  for (const int frame : {1, 30}) {
+    MeshData m = scene.frame_mesh(frame);
+    for (auto& q : m.positions)
+      for (double& c : q) c = double(float(c));  // as a PLY stores them
+    const SurfaceMesh s = to_surface_mesh(m);
+    const auto r = extraction_grid_spacing(s.positions(), mean_edge_length(s));
+    ASSERT_TRUE(r) << "frame " << frame;
+    EXPECT_NEAR(*r, scene.voxel_size(), 1e-6 * scene.voxel_size()) << "frame " << frame;
+  }
 }
 
 }  // namespace
