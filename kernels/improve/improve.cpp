@@ -992,13 +992,15 @@ private:
   //! (the input's own crease, sampled by a mesh at another resolution): every removal above folds the next
   //! edge along the crease. Soften the crease instead: of the moves of a corner of the fold's faces towards
   //! the centroid of its one-ring (a sixteenth of the way up to the whole), the one that leaves the sharpest
-  //! crease of its star the least sharp, if that is at least kSoftenGainDeg less sharp than before, keeps the
-  //! smallest angle (min_angle or what it was) and moves the surface by at most max_operation_deviation. It
-  //! may fold an edge beside the old fold, but never as sharply as the new sharpest crease: each move raises
-  //! the sharpest crease it touches, so the rounds that follow cannot cycle, and they remove those folds as
-  //! any other. On resurfaced pcow frame 19 (capture profile on the extraction grid): a 33.5° fold beside
-  //! the input's 51.6° crease, where each removal added a fold, gone after one such move and one collapse
-  //! (docs/results.md, 2026-11-25, later).
+  //! crease of its star the least sharp, if that is at least kSoftenGainDeg less sharp than before, leaves no
+  //! triangle below 2° that was not (as inflate_fold: a fold breaks the quality bounds, a small angle is
+  //! tolerated and the bad-triangle pass works on it next) and moves the surface by at most
+  //! max_operation_deviation. It may fold an edge beside the old fold, but never as sharply as the new
+  //! sharpest crease: each move raises the sharpest crease it touches, so the rounds that follow cannot
+  //! cycle, and they remove those folds as any other. On resurfaced pcow frame 19 (capture profile on the
+  //! extraction grid): a 33.5° fold beside the input's 51.6° crease, where each removal added a fold, gone
+  //! after one such move and one collapse; frame 27 of the capture profile's own lattice: a 21.3° fold whose
+  //! softening moves all took a 6.6° triangle to 6.1° (docs/results.md, 2026-11-25, later).
   void soften_fold(Edge e, FoldFix& best) {
     const Halfedge h0 = m_.halfedge(e, 0), h1 = m_.halfedge(e, 1);
     double best_worst = -2;
@@ -1007,7 +1009,7 @@ private:
       double old_q = 1;
       if (!gather_star(v, centroid, normal, old_q)) continue;
       const Vec3 p0 = pos(v), d = centroid - p0;
-      const double q_keep = std::min(old_q, q_min_);
+      const double q_keep = std::min(old_q, q_floor_);
       for (const double t : {0.0625, 0.125, 0.25, 0.5, 1.0}) {
         const Vec3 q = p0 + t * d;
         double new_q = 1;
