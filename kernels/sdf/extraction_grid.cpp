@@ -104,12 +104,10 @@ std::optional<double> extraction_grid_spacing(std::span<const Vec3> points, doub
   for (const double gap : other_gaps) {
     if (found && gap <= *found) break;
     if (!(gap > 0) || gap == smallest_gap || (edge_length > 0 && gap < 0.1 * edge_length)) continue;
-    too_fine = false;
     const auto r = divide_gap(points, all_planes, gap, edge_length, &too_fine);
     if (r && (!found || *r > *found)) found = r;
   }
-  if (found) return found;
-  return std::nullopt;
+  return found;
 }
 
 }  // namespace topotrack
