@@ -12,7 +12,7 @@ namespace topotrack {
 namespace {
 
 constexpr char kMagic[8] = {'T', 'T', 'C', 'H', 'E', 'C', 'K', '1'};
-constexpr std::uint32_t kVersion = 1;
+constexpr std::uint32_t kVersion = 2;  // 2: the lattice's origin after the voxel size; 1 is read as origin 0
 
 std::uint64_t fnv1a(const char* p, std::size_t n) {
   std::uint64_t h = 1469598103934665603ull;
@@ -54,6 +54,7 @@ void write_checkpoint(const std::filesystem::path& path, const Checkpoint& c) {
   put(out, std::int64_t(c.frame_index));
   put(out, c.target_edge_length);
   put(out, c.voxel_size);
+  for (int a = 0; a < 3; ++a) put(out, c.lattice_origin[a]);
   put(out, std::uint64_t(c.mesh.next_id()));
   put(out, std::uint64_t(pos.size()));
   put(out, std::uint64_t(tris.size()));
@@ -86,12 +87,18 @@ Checkpoint read_checkpoint(const std::filesystem::path& path) {
     TT_THROW(InvalidInput, path.string() << ": checkpoint is corrupt (hash mismatch)");
   r.off = 8;
   r.n = file.size() - 8;
-  if (r.get<std::uint32_t>() != kVersion) TT_THROW(InvalidInput, path.string() << ": unsupported checkpoint version");
+  const auto version = r.get<std::uint32_t>();
+  if (version != 1 && version != kVersion)
+    TT_THROW(InvalidInput, path.string() << ": unsupported checkpoint version " << version);
   Checkpoint c;
   c.frame_number = long(r.get<std::int64_t>());
   c.frame_index = long(r.get<std::int64_t>());
   c.target_edge_length = r.get<double>();
   c.voxel_size = r.get<double>();
+  if (version >= 2) {
+    for (int a = 0; a < 3; ++a) c.lattice_origin[a] = r.get<double>();
+    if (!c.lattice_origin.allFinite()) TT_THROW(InvalidInput, path.string() << ": checkpoint's lattice origin is not finite");
+  }
   const auto next_id = r.get<std::uint64_t>();
   const auto nv = r.get<std::uint64_t>(), nf = r.get<std::uint64_t>();
   if (nv > (r.n - r.off) / 32 || nf > (r.n - r.off) / 12)

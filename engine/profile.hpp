@@ -4,6 +4,7 @@
 //! command line overrides single ones with "name=value", and the parameters in effect are written next
 //! to the output. Defaults are the paper's values.
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -28,9 +29,12 @@ struct TrackerParams {
   //! extraction's own sign pattern and see every tunnel and bridge the input has, however thin (resurfaced
   //! pcow, docs/results.md, 2026-11-25 late).
   double voxel_size = 0;
-  //! With voxel_size 0: when the first frame's vertices lie on the edges of one grid (extraction_grid_spacing,
-  //! kernels/sdf/extraction_grid.hpp), the first lattice is that grid at half its spacing; otherwise, with a
-  //! warning in the first frame's report, voxel_size_factor × L as without it. On that grid a frame whose
+  //! With voxel_size 0: when the first frame's vertices lie on the edges of one grid (extraction_grid,
+  //! kernels/sdf/extraction_grid.hpp; at any origin), the first lattice is that grid (through its origin, as
+  //! every finer one: Tracker::lattice_origin) at half its spacing, or at its spacing
+  //! where half would be finer than a quarter of voxel_size_factor × L (extraction_grid_voxel); otherwise
+  //! (no grid, or one finer than that: a fine extraction tracked at a larger edge_length), with a warning in
+  //! the first frame's report, voxel_size_factor × L as without it. On that grid a frame whose
   //! topology differs from the input's after lines 8-12 has them redone once on the same lattice with line
   //! 11's sign flips keeping φ_S's topology (before any of topology_refinements; engine/tracker.cpp).
   bool extraction_grid = false;
@@ -81,6 +85,17 @@ struct TrackerParams {
 //! The voxel size of the first lattice (TrackerParams::voxel_size, else voxel_size_factor × edge_length).
 inline double first_voxel_size(const TrackerParams& p, double edge_length) {
   return p.voxel_size > 0 ? p.voxel_size : p.voxel_size_factor * edge_length;
+}
+
+//! The first lattice's voxel size on an extraction grid of spacing r found in the first frame
+//! (TrackerParams::extraction_grid): r/2, where a marching-cubes vertex at the middle of a grid edge is a node,
+//! else r, the first of the two that is at least a quarter of `profile_voxel` (first_voxel_size; the finest
+//! lattice two topology refinements reach); nothing when both are finer: a lattice 16 times as fine in each
+//! direction as the one the profile asks for would cost far more than it, in time and memory.
+inline std::optional<double> extraction_grid_voxel(double r, double profile_voxel) {
+  for (const double h : {0.5 * r, r})
+    if (h >= 0.25 * profile_voxel) return h;
+  return std::nullopt;
 }
 
 //! The folder of the bundled profiles: $TOPOTRACK_PROFILES, else <source>/profiles, else the installed

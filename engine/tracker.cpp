@@ -35,9 +35,11 @@ struct Tracker::Impl {
   FrameReport report;
   std::size_t frames = 0;
   double edge_length = 0, voxel_size = 0;
+  Vec3 origin = Vec3::Zero();  //!< the lattices' node (0, 0, 0): the extraction grid's origin, else 0
 
-  //! Whether the first lattice is the half-spacing lattice of the first frame's extraction grid
-  //! (TrackerParams::extraction_grid found one). Derived from the state a checkpoint restores.
+  //! Whether the first lattice is on the first frame's extraction grid (half its spacing, or its spacing:
+  //! extraction_grid_voxel; TrackerParams::extraction_grid found one). Derived from the state a checkpoint
+  //! restores.
   bool lattice_on_extraction_grid() const {
     return params.extraction_grid && !(params.voxel_size > 0) && voxel_size > 0 &&
            voxel_size != first_voxel_size(params, edge_length);
@@ -85,7 +87,7 @@ struct Tracker::Impl {
 
   openvdb::FloatGrid::Ptr distance(const SurfaceMesh& m, double h) {
     const auto t0 = Clock::now();
-    auto grid = signed_distance(m, h, params.sdf_half_width, params.exact_sign_band);
+    auto grid = signed_distance(m, h, params.sdf_half_width, params.exact_sign_band, origin);
     report.seconds.signed_distance += since(t0);
     return grid;
   }
@@ -101,8 +103,9 @@ struct Tracker::Impl {
       if (p.surface.n_faces() > 0) p.target = std::make_unique<TargetSurface>(TargetSurface::from_mesh(p.surface));
       if (params.topology) {  // φ_S, line 10
         const auto t1 = Clock::now();
-        if (theta && std::abs(theta->voxelSize()[0] - voxel_size) <= 1e-9 * voxel_size) p.phi = theta->deepCopy();
-        else p.phi = signed_distance(p.surface, voxel_size, params.sdf_half_width, params.exact_sign_band);
+        // The level set itself where it lies on the tracker's lattice (φ_M and φ_S are combined node by node).
+        if (theta && is_lattice(theta->transform(), voxel_size, origin)) p.phi = theta->deepCopy();
+        else p.phi = signed_distance(p.surface, voxel_size, params.sdf_half_width, params.exact_sign_band, origin);
         p.voxel_size = voxel_size;
         p.seconds.signed_distance = since(t1);
       }
@@ -119,11 +122,18 @@ struct Tracker::Impl {
     mesh = std::move(target);
     voxel_size = first_voxel_size(params, edge_length);
     if (params.extraction_grid && !(params.voxel_size > 0)) {
-      const auto r = extraction_grid_spacing(mesh.positions(), mean_edge_length(mesh));
-      if (r) voxel_size = 0.5 * *r;
+      const auto grid = extraction_grid(mesh.positions(), mean_edge_length(mesh));
+      const auto h = grid ? extraction_grid_voxel(grid->spacing, voxel_size) : std::nullopt;
+      if (h) {
+        voxel_size = *h;
+        origin = grid->origin;
+      } else if (grid)
+        report.warnings.push_back("tracker.extraction_grid: the first frame was extracted on a grid of spacing " +
+                                  std::to_string(grid->spacing) + ", finer than a quarter of the profile's voxels of " +
+                                  std::to_string(voxel_size) + " (voxel_size_factor x L), which are used");
       else
         report.warnings.push_back("tracker.extraction_grid: the first frame's vertices do not lie on the edges of "
-                                  "one grid with nodes at multiples of its spacing; voxels of " +
+                                  "one grid; voxels of " +
                                   std::to_string(voxel_size) + " (voxel_size_factor x L) used");
     }
     improve(nullptr);
@@ -411,12 +421,16 @@ const TrackerParams& Tracker::params() const { return impl_->params; }
 std::size_t Tracker::frames() const { return impl_->frames; }
 double Tracker::edge_length() const { return impl_->edge_length; }
 double Tracker::voxel_size() const { return impl_->voxel_size; }
+const Vec3& Tracker::lattice_origin() const { return impl_->origin; }
 
-void Tracker::restore(SurfaceMesh mesh, std::size_t frames_done, double edge_length, double voxel_size) {
+void Tracker::restore(SurfaceMesh mesh, std::size_t frames_done, double edge_length, double voxel_size,
+                      const Vec3& lattice_origin) {
+  if (!lattice_origin.allFinite()) TT_THROW(InvalidInput, "Tracker::restore: the lattice's origin is not finite");
   impl_->mesh = std::move(mesh);
   impl_->frames = frames_done;
   impl_->edge_length = edge_length;
   impl_->voxel_size = voxel_size;
+  impl_->origin = lattice_origin;
   impl_->events.clear();
   impl_->velocities.assign(impl_->mesh.vertices_size(), Vec3::Zero());
   impl_->canonicalize();

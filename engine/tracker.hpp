@@ -109,10 +109,14 @@ public:
   //! L and the voxel size in effect (fixed by the first frame when edge_length is 0).
   double edge_length() const;
   double voxel_size() const;
+  //! The lattices' node (0, 0, 0): the origin of the grid the first frame was extracted on when the lattice is
+  //! that grid's (TrackerParams::extraction_grid), else 0 (signed_distance.hpp's convention).
+  const Vec3& lattice_origin() const;
 
   //! Resume from a saved state: M and the fixed scalars (see engine/checkpoint.hpp); the next add_frame
   //! continues exactly as an uninterrupted run would.
-  void restore(SurfaceMesh mesh, std::size_t frames_done, double edge_length, double voxel_size);
+  void restore(SurfaceMesh mesh, std::size_t frames_done, double edge_length, double voxel_size,
+               const Vec3& lattice_origin = Vec3::Zero());
 
 private:
   struct Impl;

@@ -64,6 +64,9 @@ void add_gen_command(CLI::App& app) {
       ->check(CLI::Range(0, 4096));
   sub->add_option("--start", opt->params.start, "resurface: first source frame number");
   sub->add_option("--every", opt->params.every, "resurface: use every n-th source frame")->check(CLI::PositiveNumber);
+  sub->add_option("--grid-offset", opt->params.grid_offset,
+                  "resurface: the grid's nodes at (X + i, Y + j, Z + k) voxels, each in [0, 1) (default 0,0,0)")
+      ->delimiter(',');
   sub->add_option("--seed", opt->params.seed, "perturbs the synthetic shapes (deterministic)");
   sub->add_option("--progress", opt->progress, "auto | bar | lines | jsonl | quiet");
   sub->callback([opt] { run_gen(*opt); });

@@ -17,12 +17,12 @@ struct InfoOptions {
   bool json = false;
 };
 
-//! The spacing of the grid the frame was extracted on, 0 when it was not (kernels/sdf/extraction_grid.hpp).
-double grid_spacing(const MeshData& mesh, const SoupStats& s) {
-  return extraction_grid_spacing(positions_of(mesh), s.edge_length.mean).value_or(0.0);
+//! The grid the frame was extracted on, spacing 0 when it was not (kernels/sdf/extraction_grid.hpp).
+ExtractionGrid grid_of(const MeshData& mesh, const SoupStats& s) {
+  return extraction_grid(positions_of(mesh), s.edge_length.mean).value_or(ExtractionGrid{});
 }
 
-nlohmann::json to_json(const InputFrame& f, const SoupStats& s, double grid) {
+nlohmann::json to_json(const InputFrame& f, const SoupStats& s, const ExtractionGrid& grid) {
   nlohmann::json j;
   j["file"] = f.path.string();
   if (f.number >= 0) j["frame"] = f.number;
@@ -46,7 +46,10 @@ nlohmann::json to_json(const InputFrame& f, const SoupStats& s, double grid) {
                       {"max", s.edge_length.max}};
   j["min_angle_deg"] = s.min_angle_deg;
   j["share_min_angle_below_10deg"] = s.share_below_10deg;
-  j["extraction_grid"] = grid > 0 ? nlohmann::json(grid) : nlohmann::json();  // tracker.voxel_size: half of it
+  // tracker.extraction_grid: the lattice at half the spacing, through that origin.
+  j["extraction_grid"] = grid.spacing > 0 ? nlohmann::json(grid.spacing) : nlohmann::json();
+  j["extraction_grid_origin"] = grid.spacing > 0 ? nlohmann::json({grid.origin.x(), grid.origin.y(), grid.origin.z()})
+                                                 : nlohmann::json();
   return j;
 }
 
@@ -73,7 +76,7 @@ void run_info(const InfoOptions& opt) {
   for (const auto& f : frames) {
     const MeshData mesh = load_mesh_data(f.path);
     const SoupStats s = analyze_soup(mesh);
-    const double grid = grid_spacing(mesh, s);
+    const ExtractionGrid grid = grid_of(mesh, s);
     if (opt.json) {
       all.push_back(to_json(f, s, grid));
       continue;
@@ -82,7 +85,7 @@ void run_info(const InfoOptions& opt) {
     std::snprintf(edges, sizeof edges, "%.4g/%.4g/%.4g", s.edge_length.min, s.edge_length.mean, s.edge_length.max);
     const std::string genus = s.genus >= 0 ? std::to_string(s.genus) : "-";
     char grid_text[32] = "-";
-    if (grid > 0) std::snprintf(grid_text, sizeof grid_text, "%.7g", grid);
+    if (grid.spacing > 0) std::snprintf(grid_text, sizeof grid_text, "%.7g", grid.spacing);  // origin: --json
     std::printf("%-28s %9zu %9zu %5zu %6ld %5s  %-24s %10.4g %30s %8.2f %5.1f%% %10s\n",
                 f.path.filename().string().c_str(), s.vertices, s.triangles, s.components, s.euler, genus.c_str(),
                 status(s).c_str(), s.bbox.diagonal(), edges, s.min_angle_deg, 100.0 * s.share_below_10deg, grid_text);

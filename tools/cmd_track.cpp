@@ -187,6 +187,8 @@ void write_output(FrameOutput& o, OutputSink& sink) {
   sink.report["frames"].push_back(fj);
   sink.report["edge_length"] = o.checkpoint.target_edge_length;
   sink.report["voxel_size"] = o.checkpoint.voxel_size;
+  const Vec3& origin = o.checkpoint.lattice_origin;
+  sink.report["lattice_origin"] = {origin.x(), origin.y(), origin.z()};
   write_file_atomic(sink.json_path, sink.report.dump(1) + "\n");
   write_checkpoint(sink.checkpoint_path, o.checkpoint);
   char summary[160];
@@ -295,7 +297,7 @@ void run_track(TrackOptions opt) {
     start = std::size_t(c.frame_index) + 1;
     for (const auto& f : old["frames"])
       if (f.value("index", std::size_t(0)) < start) report["frames"].push_back(f);
-    tracker.restore(std::move(c.mesh), start, c.target_edge_length, c.voxel_size);
+    tracker.restore(std::move(c.mesh), start, c.target_edge_length, c.voxel_size, c.lattice_origin);
     progress.message("resuming after frame " + std::to_string(c.frame_number));
   } else if (opt.resume) {
     progress.message("nothing to resume in " + out.string() + ": starting from the first frame");
@@ -367,7 +369,8 @@ void run_track(TrackOptions opt) {
     o.input = f.path.string();
     o.mesh = output_mesh(tracker);
     o.events = tracker.take_events();  // moved: the writer runs beside the next frame
-    o.checkpoint = {f.number, long(i), tracker.edge_length(), tracker.voxel_size(), tracker.mesh().clone()};
+    o.checkpoint = {f.number, long(i), tracker.edge_length(), tracker.voxel_size(), tracker.mesh().clone(),
+                    tracker.lattice_origin()};
     o.report = *r;
     o.load = std::move(cur.load);
     o.io_seconds = cur.io_seconds;

@@ -106,6 +106,8 @@ GenReport generate_resurface(const GenParams& params, const fs::path& dir, nlohm
   const int resolution = params.resolution == 0 ? 128 : params.resolution;
   if (resolution < 8 || resolution > 4096)
     TT_THROW(InvalidInput, "resurface: resolution must be in [8, 4096], got " << params.resolution);
+  for (const double o : params.grid_offset)
+    if (!(o >= 0 && o < 1)) TT_THROW(InvalidInput, "resurface: a grid offset must be in [0, 1) voxels, got " << o);
   const FrameSequence seq = find_frames(params.source);
   std::vector<SequenceFrame> chosen;
   for (const auto& f : seq.frames) {
@@ -145,6 +147,7 @@ GenReport generate_resurface(const GenParams& params, const fs::path& dir, nlohm
     try {
       ResurfaceParams rp;
       rp.voxel_size = report.voxel_size;
+      rp.origin = report.voxel_size * Vec3(params.grid_offset[0], params.grid_offset[1], params.grid_offset[2]);
       ResurfaceReport rr;
       mesh = resurface(source, rp, &rr);
       r.voids_filled = rr.voids_filled + rr.islands_removed;
@@ -164,6 +167,8 @@ GenReport generate_resurface(const GenParams& params, const fs::path& dir, nlohm
   info["source"] = params.source;
   info["start"] = params.start;
   info["every"] = params.every;
+  info["grid_origin"] = {report.voxel_size * params.grid_offset[0], report.voxel_size * params.grid_offset[1],
+                         report.voxel_size * params.grid_offset[2]};
   info["ground_truth"] = "ground_truth/";
   if (!seq.warnings.empty()) info["source_warnings"] = seq.warnings;
   return report;
@@ -174,6 +179,8 @@ GenReport generate_resurface(const GenParams& params, const fs::path& dir, nlohm
 GenReport generate_sequence(const GenParams& params, const fs::path& dir) {
   const auto t0 = Clock::now();
   if (params.kind != "resurface") synthetic_kind_from_name(params.kind);  // UsageError before touching DIR
+  if (params.kind != "resurface" && params.grid_offset != std::array<double, 3>{0, 0, 0})
+    TT_THROW(UsageError, "gen " << params.kind << ": --grid-offset is for resurface (the synthetic kinds' grids are at 0)");
   ensure_dir(dir);
   nlohmann::json info;
   GenReport report = params.kind == "resurface" ? generate_resurface(params, dir, info)

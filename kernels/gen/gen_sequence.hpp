@@ -4,6 +4,7 @@
 //!   DIR/gen.json               what was generated: parameters, voxel size, per frame counts and topology
 //!   DIR/ground_truth.json      blobs / morph / metaballs: SyntheticScene::ground_truth()
 //!   DIR/ground_truth/          resurface: byte copies of the coherent source frames, numbered like the output
+#include <array>
 #include <filesystem>
 #include <functional>
 #include <string>
@@ -35,6 +36,9 @@ struct GenParams {
   std::string source;  //!< resurface: the coherent sequence (folder, glob or frame pattern)
   long start = -1;     //!< resurface: first source frame number used (-1: the first frame)
   int every = 1;       //!< resurface: use every n-th source frame
+  //! resurface: the extraction grid's nodes at (grid_offset + (i, j, k)) × voxel size (a simulation domain's
+  //! corner, cell-centred samples); each in [0, 1), 0: nodes at multiples of the voxel size.
+  std::array<double, 3> grid_offset{0, 0, 0};
   //! Called after each frame with its report and the total frame count; may be empty.
   std::function<void(const GenFrameReport&, int)> progress;
 };

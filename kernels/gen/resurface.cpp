@@ -24,6 +24,7 @@ MeshData resurface(const MeshData& source, const ResurfaceParams& params, Resurf
   const auto t0 = Clock::now();
   SignedDistanceParams sdf;
   sdf.voxel_size = params.voxel_size;
+  sdf.origin = params.origin;
   sdf.min_thickness_voxels = std::max(0.0, params.min_thickness_voxels);
   sdf.half_width_voxels = std::max(params.half_width_voxels, sdf.min_thickness_voxels > 0 ? 0.5 * sdf.min_thickness_voxels + 1.5 : 1.0);
   sdf.exact_sign_band_voxels = std::min(params.exact_sign_band_voxels, sdf.half_width_voxels);

@@ -12,6 +12,7 @@
 //! number's union seal thin gaps of a self-intersecting capture into inner cavities (pcow frame 81: 2),
 //! and a captured body has none.
 #include "io/mesh_data.hpp"
+#include "kernels/mesh/surface_mesh.hpp"
 
 namespace topotrack {
 
@@ -24,6 +25,7 @@ struct ResurfaceParams {
   double min_thickness_voxels = 1.75;
   //! Remove the components enclosed by others (cavity walls and what floats in them), fill_voids.hpp.
   bool fill_voids = true;
+  Vec3 origin = Vec3::Zero();  //!< the grid's node (0, 0, 0) (SignedDistanceParams::origin)
 };
 
 struct ResurfaceReport {

@@ -63,11 +63,45 @@ void check_signed_distance_input(std::span<const Vec3> positions, std::span<cons
                                                             << positions.size() << " vertices)");
 }
 
+openvdb::math::Transform::Ptr lattice_transform(double voxel_size, const Vec3& origin) {
+  auto xform = voxel_transform(voxel_size);
+  if (!origin.allFinite()) TT_THROW(InvalidInput, "signed distance: the lattice's origin is not finite");
+  if (!origin.isZero()) xform->postTranslate(openvdb::Vec3d(origin.x(), origin.y(), origin.z()));
+  return xform;
+}
+
+bool is_lattice(const openvdb::math::Transform& xform, double voxel_size, const Vec3& origin) {
+  if (!xform.isLinear() || !(voxel_size > 0)) return false;
+  const double tol = 1e-9 * voxel_size;
+  const openvdb::Vec3d o = xform.indexToWorld(openvdb::Vec3d(0, 0, 0));
+  for (int a = 0; a < 3; ++a) {
+    if (std::abs(o[a] - origin[a]) > tol) return false;
+    openvdb::Vec3d e(0, 0, 0);
+    e[a] = 1;
+    const openvdb::Vec3d step = xform.indexToWorld(e) - o;
+    for (int b = 0; b < 3; ++b)
+      if (std::abs(step[b] - (a == b ? voxel_size : 0.0)) > tol) return false;
+  }
+  return true;
+}
+
 openvdb::FloatGrid::Ptr signed_distance(std::span<const Vec3> positions,
                                         std::span<const std::array<Index, 3>> triangles,
                                         const SignedDistanceParams& params, SignedDistanceReport* report) {
   using Clock = std::chrono::steady_clock;
   ensure_openvdb_initialized();
+  if (!params.origin.isZero()) {
+    // The lattice through `origin`: the distance to the mesh moved by -origin on the plain lattice, then the
+    // grid's transform moved back (distances do not change under a translation).
+    auto xform = lattice_transform(params.voxel_size, params.origin);
+    std::vector<Vec3> moved(positions.begin(), positions.end());
+    for (Vec3& p : moved) p -= params.origin;
+    SignedDistanceParams at_zero = params;
+    at_zero.origin = Vec3::Zero();
+    auto grid = signed_distance(moved, triangles, at_zero, report);
+    grid->setTransform(xform);
+    return grid;
+  }
   const double voxel_size = params.voxel_size, half_width_voxels = params.half_width_voxels;
   auto xform = voxel_transform(voxel_size);
   check_signed_distance_input(positions, triangles, half_width_voxels);
@@ -141,11 +175,16 @@ openvdb::FloatGrid::Ptr signed_distance(std::span<const Vec3> positions,
 }
 
 openvdb::FloatGrid::Ptr signed_distance(const SurfaceMesh& mesh, double voxel_size, double half_width_voxels,
-                                        double exact_sign_band_voxels) {
+                                        double exact_sign_band_voxels, const Vec3& origin) {
   std::vector<Vec3> positions;
   std::vector<std::array<Index, 3>> triangles;
   extract_triangles(mesh, positions, triangles);
-  return signed_distance(positions, triangles, voxel_size, half_width_voxels, exact_sign_band_voxels);
+  SignedDistanceParams p;
+  p.voxel_size = voxel_size;
+  p.origin = origin;
+  p.half_width_voxels = half_width_voxels;
+  p.exact_sign_band_voxels = exact_sign_band_voxels;
+  return signed_distance(positions, triangles, p);
 }
 
 }  // namespace topotrack

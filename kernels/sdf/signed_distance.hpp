@@ -3,7 +3,9 @@
 //! level set of a closed triangle mesh, voxelized with OpenVDB.
 //!
 //! Grid convention (shared by marching_cubes): the transform is a uniform scale by `voxel_size`, so
-//! the voxel with index (i, j, k) has its centre at the world point (i, j, k) * voxel_size (no offset).
+//! the voxel with index (i, j, k) has its centre at the world point (i, j, k) * voxel_size (no offset); a
+//! lattice through another origin (SignedDistanceParams::origin: the grid a surface was extracted on) adds a
+//! translation, and the code downstream reads positions through the grid's transform.
 //! Values are world-space distances, negative inside, positive outside; active voxels form a band of
 //! `half_width_voxels` voxels on each side of the surface; inactive voxels and tiles hold the
 //! background +-half_width_voxels * voxel_size with the sign of their side. Grid class GRID_LEVEL_SET.
@@ -23,6 +25,11 @@ void ensure_openvdb_initialized();
 //! The transform of the convention above: uniform scale, voxel centres at integer multiples.
 //! \throw InvalidInput when voxel_size is not finite and positive.
 openvdb::math::Transform::Ptr voxel_transform(double voxel_size);
+//! The same with voxel centres at origin + (i, j, k) * voxel_size (voxel_transform when origin is 0).
+openvdb::math::Transform::Ptr lattice_transform(double voxel_size, const Vec3& origin);
+//! Whether `xform` is that lattice (linear, unrotated, voxel size and origin within 1e-9 voxel): a level
+//! set on it can stand in for signed_distance's at (voxel_size, origin), node for node.
+bool is_lattice(const openvdb::math::Transform& xform, double voxel_size, const Vec3& origin);
 
 //! The input check shared by every signed-distance entry point (signed_distance, narrow_band_signed_distance).
 //! \throw InvalidInput when half_width_voxels is below 1 or not finite, a coordinate is not finite or a
@@ -41,6 +48,7 @@ enum class SdfMethod {
 
 struct SignedDistanceParams {
   double voxel_size = 0;            //!< required: finite, > 0
+  Vec3 origin = Vec3::Zero();       //!< the lattice's node (0, 0, 0) (lattice_transform); finite
   double half_width_voxels = 3.0;   //!< active band on each side of the surface, >= 1
   //! > 0: voxels closer to the surface than that many voxels get their sign decided exactly
   //! (exact_sign.hpp), as ConstrainTopology needs (§4.3) and as marching cubes of real data needs.
@@ -82,6 +90,6 @@ openvdb::FloatGrid::Ptr signed_distance(std::span<const Vec3> positions,
 //! `exact_sign_band_voxels` > 0: voxels closer to the surface than that many voxels get their sign decided
 //! exactly (kernels/sdf/exact_sign.hpp), as ConstrainTopology needs (§4.3).
 openvdb::FloatGrid::Ptr signed_distance(const SurfaceMesh& mesh, double voxel_size, double half_width_voxels = 3.0,
-                                        double exact_sign_band_voxels = 0.0);
+                                        double exact_sign_band_voxels = 0.0, const Vec3& origin = Vec3::Zero());
 
 }  // namespace topotrack

@@ -43,6 +43,10 @@ TEST(Profile, EveryBundledProfileLoads) {
   // A finer lattice where the topology differs (tests/engine/tracker_test.cpp); the paper has one lattice.
   EXPECT_EQ(load_profile("capture").topology_refinements, 2);
   EXPECT_EQ(load_profile("fluid").topology_refinements, 1);
+  // The lattice on the grid a capture was extracted on, where there is one (tracker_real_data_test.cpp).
+  EXPECT_TRUE(load_profile("capture").extraction_grid);
+  EXPECT_FALSE(load_profile("default").extraction_grid);
+  EXPECT_FALSE(load_profile("fluid").extraction_grid);
   EXPECT_EQ(load_profile("default").topology_refinements, 0);
   EXPECT_EQ(load_profile("default").coarse_params.max_iterations_per_level_after_pass, 3);
   EXPECT_EQ(load_profile("default").coarse_params.node_spacing_factor, 4);  // the paper's

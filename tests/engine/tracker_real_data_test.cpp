@@ -87,13 +87,16 @@ TEST(TrackerRealData, HalfEdgeVoxelsKeepAThinTipThePapersLatticeCuts) {
   EXPECT_EQ(load_profile("capture").voxel_size_factor, 0.5);
 }
 
-// The same two frames with the capture profile: the half-L lattice misses a handle of frame 2 (this machine:
-// M's Euler characteristic -2, the input's 2), and the quarter-L retry of tracker.topology_refinements gets it.
+// The same two frames with the capture profile on its own lattice (not the grid they were extracted on, which
+// the profile finds: tracker.extraction_grid, below): the half-L lattice misses a handle of frame 2 (this
+// machine: M's Euler characteristic -2, the input's 2), and the quarter-L retry of tracker.topology_refinements
+// gets it.
 TEST(TrackerRealData, CaptureProfileRefinesTheLatticeForAHandleItMisses) {
   if (!have_pcow()) GTEST_SKIP() << "no pcow data";
   const auto [f1, f2] = resurfaced_pcow();
   const auto track = [&](int refinements) {
     TrackerParams p = load_profile("capture");
+    p.extraction_grid = false;
     p.topology_refinements = refinements;
     Tracker tracker(p);
     tracker.add_frame(f1);
@@ -161,6 +164,23 @@ TEST(TrackerRealData, TheExtractionGridGivesTheInputsTopology) {
   const FrameReport rq = found.add_frame(pair.second);
   EXPECT_EQ(rq.components, std::size_t(want_components));
   EXPECT_EQ(rq.euler, want_euler);
+
+  // Both frames moved by a fraction of the spacing on each axis, as if extracted on a grid through another
+  // origin (a simulation domain's corner): the grid is found with that origin and the lattice runs through it.
+  const Vec3 by = pair.grid_spacing * Vec3(0.37, -0.21, 0.29);
+  const auto moved = [&](const SurfaceMesh& m) {
+    SurfaceMesh out = m.clone();
+    for (Vec3& p : out.positions()) p = (p + by).cast<float>().cast<double>();  // as a PLY stores them
+    return out;
+  };
+  Tracker shifted(q);
+  EXPECT_TRUE(shifted.add_frame(moved(pair.first)).warnings.empty());
+  EXPECT_NEAR(shifted.voxel_size(), 0.5 * pair.grid_spacing, 1e-6 * pair.grid_spacing);
+  for (int a = 0; a < 3; ++a) EXPECT_NEAR(shifted.lattice_origin()[a], by[a], 1e-5 * pair.grid_spacing) << a;
+  const FrameReport rs = shifted.add_frame(moved(pair.second));
+  shifted.mesh().validate(true);
+  EXPECT_EQ(rs.components, std::size_t(want_components));
+  EXPECT_EQ(rs.euler, want_euler);
 }
 
 // Resurfaced pcow frames 2 -> 3 (of `gen resurface --frames 3`) with the capture profile on the grid they were

@@ -4,7 +4,10 @@
 #include <tbb/global_control.h>
 #include <tbb/task_group.h>
 
+#include <cstring>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <unordered_map>
 
 #include "engine/checkpoint.hpp"
@@ -173,6 +176,37 @@ TEST(Tracker, ResumeFromCheckpointIsBitIdentical) {
   EXPECT_EQ(rest.events[1], straight.events[3]);
 }
 
+// A checkpoint of version 1 (before the lattice's origin was stored) is still read, with origin 0.
+TEST(Tracker, CheckpointOfVersionOneIsReadWithOriginZero) {
+  Tracker t;
+  t.add_frame(peanut(Vec3::Zero()));
+  const auto path = std::filesystem::temp_directory_path() / "topotrack_tracker_v1.checkpoint";
+  write_checkpoint(path, {1, 0, t.edge_length(), t.voxel_size(), t.mesh().clone(), Vec3(0.25, -0.5, 1.0)});
+  std::string bytes;
+  {
+    std::ifstream in(path, std::ios::binary);
+    bytes.assign(std::istreambuf_iterator<char>(in), {});
+  }
+  ASSERT_GT(bytes.size(), 76u);
+  // Version 2 -> 1: drop the 24 bytes of the origin after the voxel size, set the version, hash again.
+  const std::uint32_t v1 = 1;
+  std::memcpy(&bytes[8], &v1, 4);
+  bytes.erase(44, 24);
+  bytes.resize(bytes.size() - 8);
+  std::uint64_t h = 1469598103934665603ull;  // FNV-1a, as docs/formats.md
+  for (const char c : bytes) h = (h ^ std::uint8_t(c)) * 1099511628211ull;
+  bytes.append(reinterpret_cast<const char*>(&h), 8);
+  {
+    std::ofstream out(path, std::ios::binary | std::ios::trunc);
+    out.write(bytes.data(), std::streamsize(bytes.size()));
+  }
+  const Checkpoint c = read_checkpoint(path);
+  std::filesystem::remove(path);
+  EXPECT_EQ(c.lattice_origin, Vec3::Zero());
+  EXPECT_EQ(c.voxel_size, t.voxel_size());
+  EXPECT_EQ(encode_mesh(c.mesh), encode_mesh(t.mesh()));
+}
+
 //! The pipelined use of the API (what `track` does): frame n+1 prepared in a task while frame n is tracked.
 TrackRun track_pipelined(const std::vector<SurfaceMesh>& frames) {
   Tracker tracker;
@@ -277,24 +311,91 @@ TrackerParams coarse_lattice(int refinements) {
 }
 
 TEST(Tracker, ExtractionGridFoundOrAWarning) {
+  EXPECT_EQ(extraction_grid_voxel(0.01, 0.02), 0.005);
+  EXPECT_EQ(extraction_grid_voxel(0.01, 0.03), 0.01);  // half the spacing would be finer than 0.03 / 4
+  EXPECT_EQ(extraction_grid_voxel(0.01, 0.04), 0.01);
+  EXPECT_FALSE(extraction_grid_voxel(0.01, 0.05));
+  const SurfaceMesh grid_frame = spheres_with_gap(0.02, 0.08, 0);  // marching cubes on a grid of 0.01
+  const auto voxel_for = [&](double edge_length, std::size_t want_warnings) {
+    TrackerParams p;
+    p.edge_length = edge_length;
+    p.extraction_grid = true;
+    Tracker tracker(p);
+    const FrameReport& r = tracker.add_frame(grid_frame);
+    EXPECT_EQ(r.warnings.size(), want_warnings) << "edge length " << edge_length;
+    for (const std::string& w : r.warnings) EXPECT_NE(w.find("tracker.extraction_grid"), std::string::npos) << w;
+    return tracker.voxel_size();
+  };
+  EXPECT_NEAR(voxel_for(0.01, 0), 0.005, 1e-9);  // the grid at half its spacing
+  EXPECT_NEAR(voxel_for(0.03, 0), 0.01, 1e-9);   // at its spacing
+  // A fine extraction tracked at a far larger edge length: the profile's lattice, and a warning that says why.
+  EXPECT_DOUBLE_EQ(voxel_for(0.05, 1), 0.05);
   TrackerParams p = coarse_lattice(0);  // voxels of 0.1 without the grid
   p.extraction_grid = true;
-  {  // Marching cubes on a grid of 0.01: the first lattice is that grid at half its spacing.
-    Tracker tracker(p);
-    EXPECT_TRUE(tracker.add_frame(spheres_with_gap(0.02, 0.08, 0)).warnings.empty());
-    EXPECT_NEAR(tracker.voxel_size(), 0.005, 1e-9);
-  }
   {  // An icosphere's own triangles lie on no grid: a warning, and voxel_size_factor × L.
     Tracker tracker(p);
     const FrameReport& r = tracker.add_frame(test::icosphere(4, 0.5).mesh());
     ASSERT_EQ(r.warnings.size(), 1u);
     EXPECT_NE(r.warnings[0].find("tracker.extraction_grid"), std::string::npos) << r.warnings[0];
+    EXPECT_NE(r.warnings[0].find("do not lie on the edges"), std::string::npos) << r.warnings[0];
     EXPECT_DOUBLE_EQ(tracker.voxel_size(), 0.1);
   }
   p.voxel_size = 0.07;  // tracker.voxel_size comes first
   Tracker fixed(p);
   EXPECT_TRUE(fixed.add_frame(spheres_with_gap(0.02, 0.08, 0)).warnings.empty());
   EXPECT_DOUBLE_EQ(fixed.voxel_size(), 0.07);
+}
+
+//! Two spheres of radius 0.2 whose gap [lo, hi] along x lies across the grid node x = origin.x(), extracted by
+//! marching cubes on the grid of `voxel` through `origin` (a simulation domain's corner), moved by t along y.
+SurfaceMesh spheres_on_grid(double lo, double hi, double t, double voxel, const Vec3& origin) {
+  test::Soup all = test::merge(test::icosphere(4, 0.2, Vec3(lo - 0.2, t, 0)), test::icosphere(4, 0.2, Vec3(hi + 0.2, t, 0)));
+  SignedDistanceParams p;
+  p.voxel_size = voxel;
+  p.origin = origin;
+  return to_surface_mesh(marching_cubes(*signed_distance(all.positions, all.triangles, p)));
+}
+
+// A grid through another origin (tracker.extraction_grid finds it): the lattice runs through the grid's nodes,
+// so a gap 0.003 wide around the node x = 0.0025, which the input's marching cubes saw, is seen by the tracker
+// too. The same lattice through 0 has no node in the gap, and ConstrainTopology(M, φ_M) merges the spheres.
+// A run resumed from a checkpoint (which keeps the origin) continues bit for bit.
+TEST(Tracker, ExtractionGridThroughAnotherOrigin) {
+  const Vec3 origin(0.0025, 0.0013, -0.0041);
+  std::vector<SurfaceMesh> frames;
+  for (int i = 0; i < 3; ++i) frames.push_back(spheres_on_grid(0.001, 0.004, 0.002 * i, 0.01, origin));
+  for (const auto& f : frames) ASSERT_EQ(connected_components(f), 2) << "the input's extraction sees the gap";
+  TrackerParams p;
+  p.edge_length = 0.01;
+  p.extraction_grid = true;
+  Tracker tracker(p);
+  EXPECT_TRUE(tracker.add_frame(frames[0]).warnings.empty());
+  EXPECT_NEAR(tracker.voxel_size(), 0.005, 1e-9);
+  for (int a = 0; a < 3; ++a) EXPECT_NEAR(tracker.lattice_origin()[a], origin[a], 1e-6) << a;
+  // Interrupted after frame 1: the checkpoint keeps the origin.
+  const auto path = std::filesystem::temp_directory_path() / "topotrack_tracker_origin_test.checkpoint";
+  write_checkpoint(path, {1, 0, tracker.edge_length(), tracker.voxel_size(), tracker.mesh().clone(),
+                          tracker.lattice_origin()});
+  Checkpoint c = read_checkpoint(path);
+  std::filesystem::remove(path);
+  EXPECT_EQ(c.lattice_origin, tracker.lattice_origin());
+  Tracker resumed(p);
+  resumed.restore(std::move(c.mesh), 1, c.target_edge_length, c.voxel_size, c.lattice_origin);
+  const TrackRun rest = track(frames, 1, &resumed);
+  for (std::size_t i = 1; i < frames.size(); ++i) {
+    const FrameReport& r = tracker.add_frame(frames[i]);
+    tracker.mesh().validate(true);
+    EXPECT_EQ(r.components, 2u) << "frame " << i;
+    EXPECT_EQ(encode_mesh(tracker.mesh()), rest.meshes[i - 1]) << "frame " << i;
+    EXPECT_EQ(encode_events(tracker.events()), rest.events[i - 1]) << "frame " << i;
+  }
+  // The same spacing through 0 (tracker.voxel_size): no node in the gap.
+  TrackerParams at_zero = p;
+  at_zero.voxel_size = 0.005;
+  Tracker plain(at_zero);
+  plain.add_frame(frames[0]);
+  EXPECT_EQ(plain.lattice_origin(), Vec3::Zero());
+  EXPECT_EQ(plain.add_frame(frames[1]).components, 1u) << "the case this test is about";
 }
 
 TEST(Tracker, RefinesTheLatticeWhereItMissesTheInputsTopology) {

@@ -17,6 +17,7 @@
 #include "kernels/gen/synthetic.hpp"
 #include "kernels/mesh/mesh_convert.hpp"
 #include "kernels/mesh/mesh_queries.hpp"
+#include "kernels/sdf/extraction_grid.hpp"
 #include "kernels/sdf/signed_distance.hpp"
 
 namespace topotrack {
@@ -179,6 +180,11 @@ TEST(Gen, BadParameters) {
   g.source = (fs::path(TOPOTRACK_BINARY_DIR) / "no_such_folder").string();
   EXPECT_THROW(generate_sequence(g, temp_dir("bad_source")), InvalidInput);
   EXPECT_THROW(resurface(MeshData{}, {0.0}), InvalidInput);
+  g.grid_offset = {0.25, 1.0, 0};  // in [0, 1) voxels
+  EXPECT_THROW(generate_sequence(g, temp_dir("bad_offset")), InvalidInput);
+  g.kind = "blobs";
+  g.grid_offset = {0.25, 0, 0};  // the synthetic kinds have no such option
+  EXPECT_THROW(generate_sequence(g, temp_dir("bad_offset_kind")), UsageError);
 }
 
 TEST(Gen, WritesSyntheticSequence) {
@@ -281,6 +287,24 @@ TEST(Gen, ResurfaceSambaKeepsTheSurface) {
       ASSERT_LT(grid_distance(*src_sdf, pos(out, i)), h) << "frame " << n << " vertex " << i;
   }
   EXPECT_NE(counts[0], counts[1]);
+
+  // On a grid through another origin (--grid-offset): the frame's vertices lie on that grid's edges, which
+  // tracker.extraction_grid finds with its origin.
+  g.frames = 1;
+  g.grid_offset = {0.37, 0.5, 0.0};
+  const fs::path moved = temp_dir("gen_resurface_offset");
+  const GenReport off = generate_sequence(g, moved);
+  ASSERT_EQ(off.frames.size(), 1u);
+  const MeshData m = read_mesh(moved / off.frames[0].file);
+  std::vector<Vec3> points;
+  for (std::size_t i = 0; i < m.vertex_count(); ++i) points.push_back(pos(m, i));
+  const auto grid = extraction_grid(points, 0.0);
+  ASSERT_TRUE(grid);
+  EXPECT_NEAR(grid->spacing, h, 1e-6 * h);
+  for (int a = 0; a < 3; ++a) {
+    const double t = grid->origin[a] / h - g.grid_offset[a];
+    EXPECT_NEAR(t, std::round(t), 1e-4) << "axis " << a;
+  }
 }
 
 

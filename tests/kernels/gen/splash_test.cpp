@@ -99,9 +99,10 @@ TEST(Splash, FramesAreRecognisedAsExtractedOnTheirGrid) {
     for (auto& q : m.positions)
       for (double& c : q) c = double(float(c));  // as a PLY stores them
     const SurfaceMesh s = to_surface_mesh(m);
-    const auto r = extraction_grid_spacing(s.positions(), mean_edge_length(s));
-    ASSERT_TRUE(r) << "frame " << frame;
-    EXPECT_NEAR(*r, scene.voxel_size(), 1e-6 * scene.voxel_size()) << "frame " << frame;
+    const auto g = extraction_grid(s.positions(), mean_edge_length(s));
+    ASSERT_TRUE(g) << "frame " << frame;
+    EXPECT_NEAR(g->spacing, scene.voxel_size(), 1e-6 * scene.voxel_size()) << "frame " << frame;
+    EXPECT_EQ(g->origin, Vec3::Zero()) << "frame " << frame;
   }
 }
 

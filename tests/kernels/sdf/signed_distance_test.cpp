@@ -43,6 +43,42 @@ TEST(SignedDistance, SurfaceMeshOverloadMatches) {
   for (auto it = a->cbeginValueOn(); it; ++it) ASSERT_EQ(*it, acc.getValue(it.getCoord()));
 }
 
+// A lattice through another origin (the grid a surface was extracted on): node (i, j, k) at origin + (i, j, k) h,
+// each value the distance from that point, and the same values, node for node, as the plain lattice's for the
+// mesh moved by -origin (both methods).
+TEST(SignedDistance, LatticeThroughAnotherOrigin) {
+  const test::Soup s = test::torus(48, 24);
+  const double h = 0.04;
+  const Vec3 origin(0.013, -0.02, 0.5 * h);
+  test::Soup moved = s;
+  for (Vec3& p : moved.positions) p -= origin;
+  for (const SdfMethod method : {SdfMethod::kNarrowBand, SdfMethod::kOpenVdb}) {
+    SignedDistanceParams p;
+    p.voxel_size = h;
+    p.origin = origin;
+    p.method = method;
+    auto a = signed_distance(s.positions, s.triangles, p);
+    p.origin = Vec3::Zero();
+    auto b = signed_distance(moved.positions, moved.triangles, p);
+    EXPECT_TRUE(is_lattice(a->transform(), h, origin));
+    EXPECT_FALSE(is_lattice(a->transform(), h, Vec3::Zero()));
+    EXPECT_TRUE(is_lattice(b->transform(), h, Vec3::Zero()));
+    EXPECT_FALSE(is_lattice(a->transform(), 1.01 * h, origin));
+    const auto w = a->transform().indexToWorld(openvdb::Coord(3, -2, 7));
+    EXPECT_NEAR(w.x(), origin.x() + 3 * h, 1e-12);
+    EXPECT_NEAR(w.y(), origin.y() - 2 * h, 1e-12);
+    EXPECT_NEAR(w.z(), origin.z() + 7 * h, 1e-12);
+    EXPECT_EQ(a->activeVoxelCount(), b->activeVoxelCount());
+    auto acc = b->getConstAccessor();
+    for (auto it = a->cbeginValueOn(); it; ++it) ASSERT_NEAR(*it, acc.getValue(it.getCoord()), 1e-6) << it.getCoord();
+  }
+  EXPECT_EQ(signed_distance(s.mesh(), h, 3.0, 0.0, origin)->activeVoxelCount(),
+            signed_distance(moved.mesh(), h)->activeVoxelCount());
+  auto rotated = voxel_transform(h);
+  rotated->postRotate(0.3, openvdb::math::Z_AXIS);
+  EXPECT_FALSE(is_lattice(*rotated, h, Vec3::Zero()));
+}
+
 TEST(SignedDistance, DeterministicAcrossThreadCounts) {
   const test::Soup s = test::torus(64, 32);
   openvdb::FloatGrid::Ptr one, two;
