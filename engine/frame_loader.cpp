@@ -156,17 +156,21 @@ openvdb::FloatGrid::Ptr read_level_set(const std::filesystem::path& path) {
   } catch (const openvdb::Exception& e) {
     TT_THROW(InvalidInput, path.string() << ": not a readable OpenVDB file: " << e.what());
   }
-  openvdb::FloatGrid::Ptr first;
+  // The first level set, else the first float grid; either must have cubic voxels.
+  openvdb::FloatGrid::Ptr grid;
   for (const auto& g : *grids) {
     auto f = openvdb::gridPtrCast<openvdb::FloatGrid>(g);
     if (!f) continue;
-    if (f->getGridClass() == openvdb::GRID_LEVEL_SET) return f;
-    if (!first) first = f;
+    if (!grid) grid = f;
+    if (f->getGridClass() == openvdb::GRID_LEVEL_SET) {
+      grid = f;
+      break;
+    }
   }
-  if (!first) TT_THROW(InvalidInput, path.string() << ": no float grid (a level set is needed)");
-  if (!first->transform().hasUniformScale())
-    TT_THROW(InvalidInput, path.string() << ": grid '" << first->getName() << "' has non-uniform voxels");
-  return first;
+  if (!grid) TT_THROW(InvalidInput, path.string() << ": no float grid (a level set is needed)");
+  if (!grid->transform().hasUniformScale())
+    TT_THROW(InvalidInput, path.string() << ": grid '" << grid->getName() << "' has non-uniform voxels");
+  return grid;
 }
 
 LoadedFrame load_frame(const std::filesystem::path& path, const FrameLoadParams& params) {

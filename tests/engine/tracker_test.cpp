@@ -11,6 +11,7 @@
 #include <unordered_map>
 
 #include "engine/checkpoint.hpp"
+#include "engine/frame_loader.hpp"
 #include "engine/tracker.hpp"
 #include "io/error.hpp"
 #include "io/event_file.hpp"
@@ -292,6 +293,81 @@ TEST(Tracker, AcceptsLevelSetFrames) {
     EXPECT_NO_THROW(tracker.mesh().validate(true));
   }
   EXPECT_EQ(tracker.report().components, 1u);
+}
+
+// A level set on another lattice than the tracker's (here: its voxel size, but a translation, as a simulation
+// domain's corner gives) is not φ_S: φ_M and φ_S are combined node for node. Its zero set is then tracked as a
+// mesh frame would be, bit for bit.
+TEST(Tracker, LevelSetFramesOnAnotherLatticeAreTrackedThroughTheirSurface) {
+  const test::Soup s = test::icosphere(4, 0.5);
+  TrackerParams p;
+  p.voxel_size = kVoxel;
+  Tracker from_grids(p), from_meshes(p);
+  for (int i = 0; i < 3; ++i) {
+    test::Soup moved = s;
+    for (auto& q : moved.positions) q += Vec3(0.03 * i, 0.01 * i, 0);
+    SignedDistanceParams sp;
+    sp.voxel_size = kVoxel;
+    sp.origin = kVoxel * Vec3(0.4, 0.1, -0.3);
+    const auto grid = signed_distance(moved.positions, moved.triangles, sp);
+    ASSERT_FALSE(is_lattice(grid->transform(), kVoxel, Vec3::Zero()));
+    from_grids.add_frame(*grid, "sphere.vdb");
+    from_meshes.add_frame(to_surface_mesh(marching_cubes(*grid)), "sphere.ply");
+    EXPECT_TRUE(encode_mesh(from_grids.mesh()) == encode_mesh(from_meshes.mesh())) << "frame " << i;
+    EXPECT_TRUE(encode_events(from_grids.events()) == encode_events(from_meshes.events())) << "frame " << i;
+  }
+}
+
+// .vdb frames (engine/frame_loader.hpp): the first level set of the file (else its first float grid), with its
+// transform; a grid with non-cubic voxels or a file without a float grid is rejected, naming the file.
+TEST(Tracker, ReadsLevelSetFiles) {
+  const test::Soup s = test::icosphere(3, 0.5);
+  SignedDistanceParams sp;
+  sp.voxel_size = kVoxel;
+  sp.origin = kVoxel * Vec3(0.4, 0.1, -0.3);
+  const openvdb::FloatGrid::Ptr level_set = signed_distance(s.positions, s.triangles, sp);
+  const auto dir = std::filesystem::temp_directory_path() / "topotrack_tracker_vdb_test";
+  std::filesystem::create_directories(dir);
+  const auto write = [&](const char* name, openvdb::GridPtrVec grids) {
+    openvdb::io::File(dir.string() + "/" + name).write(grids);
+    return dir / name;
+  };
+  openvdb::FloatGrid::Ptr fog = openvdb::FloatGrid::create(0.0f);
+  fog->setName("density");
+  fog->setGridClass(openvdb::GRID_FOG_VOLUME);
+  level_set->setName("surface");
+  const auto both = write("both.vdb", {fog, level_set});
+  const openvdb::FloatGrid::Ptr read = read_level_set(both);
+  EXPECT_EQ(read->getName(), "surface");
+  EXPECT_TRUE(is_lattice(read->transform(), kVoxel, sp.origin));
+  EXPECT_EQ(read->activeVoxelCount(), level_set->activeVoxelCount());
+  const LoadedFrame frame = load_frame(both);
+  ASSERT_TRUE(frame.grid);
+  Tracker tracker;
+  tracker.add_frame(*frame.grid, both.string());
+  EXPECT_EQ(tracker.report().components, 1u);
+
+  openvdb::FloatGrid::Ptr stretched = level_set->deepCopy();
+  auto xform = voxel_transform(kVoxel);
+  xform->preScale(openvdb::Vec3d(1, 1, 2));
+  stretched->setTransform(xform);
+  const auto bad = write("stretched.vdb", {fog, stretched});
+  try {
+    read_level_set(bad);
+    ADD_FAILURE() << "a level set with non-cubic voxels was read";
+  } catch (const InvalidInput& e) {
+    EXPECT_NE(std::string(e.what()).find("stretched.vdb: grid 'surface' has non-uniform voxels"), std::string::npos)
+        << e.what();
+  }
+  openvdb::Vec3SGrid::Ptr velocity = openvdb::Vec3SGrid::create();
+  const auto none = write("velocity.vdb", {velocity});
+  try {
+    read_level_set(none);
+    ADD_FAILURE() << "a file without a float grid was read";
+  } catch (const InvalidInput& e) {
+    EXPECT_NE(std::string(e.what()).find("velocity.vdb: no float grid"), std::string::npos) << e.what();
+  }
+  std::filesystem::remove_all(dir);
 }
 
 //! Two spheres of radius 0.45 on the x axis with a gap between x = lo and x = hi, the input sampled finely
