@@ -30,22 +30,20 @@ bool on_grid(std::span<const Vec3> points, double r, const Vec3& origin) {
   return two >= 0.6 * n && one <= 0.02 * n && three <= 0.5 * n;
 }
 
-//! The recurring coordinate values of one axis taken for lattice planes, ascending.
-struct AxisPlanes {
-  std::vector<double> planes;
-};
+//! Per axis, the recurring coordinate values taken for lattice planes, ascending.
+using AxisPlanes = std::array<std::vector<double>, 3>;
 
 //! Where the axis's planes lie between multiples of r, in [-r/2, r/2]: the offset most of them share (a flat
 //! face off the grid, a tank's wall, may recur more than any lattice plane but is one plane); the lowest
 //! plane's among equals. 0 within the on-grid tolerance of 0, and on an axis without planes.
-double axis_origin(const AxisPlanes& a, double r) {
+double axis_origin(const std::vector<double>& planes, double r) {
   const auto offset = [r](double p) { return p - r * std::round(p / r); };
   double best = 0;
   std::size_t best_count = 0;
-  for (const double p : a.planes) {
+  for (const double p : planes) {
     const double o = offset(p);
     std::size_t count = 0;
-    for (const double q : a.planes) count += std::abs(offset(q - o)) < 2e-3 * r;
+    for (const double q : planes) count += std::abs(offset(q - o)) < 2e-3 * r;
     if (count > best_count) best = o, best_count = count;
   }
   return std::abs(best) < 1e-3 * r ? 0.0 : best;
@@ -55,29 +53,35 @@ double axis_origin(const AxisPlanes& a, double r) {
 //! offset each axis's planes share (axis_origin); spacing and origin are then refined by least squares over
 //! the planes (the stored floats carry their own rounding), twice. A grid at the origin keeps origin 0 exactly
 //! and the spacing sum p k / sum k^2 over its planes, as before origins were found.
-std::optional<ExtractionGrid> divide_gap(std::span<const Vec3> points, const std::array<AxisPlanes, 3>& axes,
-                                         double gap, double edge_length, bool* too_fine) {
+std::optional<ExtractionGrid> divide_gap(std::span<const Vec3> points, const AxisPlanes& axes, double gap,
+                                         double edge_length, bool* too_fine) {
   for (int m = 1; m <= 8; ++m) {
     const double r0 = gap / m;
     ExtractionGrid g{r0, Vec3::Zero()};
+    // f(axis, plane, k) for each plane within 1 % of r0 of its multiple k of r0 from the origin.
+    const auto for_each_plane = [&](auto&& f) {
+      for (int a = 0; a < 3; ++a)
+        for (const double plane : axes[a]) {
+          const double p = plane - g.origin[a];
+          const double k = std::round(p / r0);
+          if (std::abs(p / r0 - k) <= 0.01) f(a, plane, k);
+        }
+    };
     for (int a = 0; a < 3; ++a) g.origin[a] = axis_origin(axes[a], r0);
     for (int round = 0; round < 2; ++round) {
       // plane = origin[a] + k r: least squares in (r, origin) where an origin is off 0, then r alone with the
       // origins fixed (for a grid at the origin the planes' own multiples: sum p k / sum k^2).
       Eigen::Matrix4d AtA = Eigen::Matrix4d::Zero();
       Eigen::Vector4d Atb = Eigen::Vector4d::Zero();
-      for (int a = 0; a < 3; ++a) {
+      for (int a = 0; a < 3; ++a)
         if (g.origin[a] == 0) AtA(a + 1, a + 1) += 1;  // held at 0
-        for (const double plane : axes[a].planes) {
-          const double k = std::round((plane - g.origin[a]) / r0);
-          if (std::abs((plane - g.origin[a]) / r0 - k) > 0.01) continue;
-          Eigen::Vector4d row = Eigen::Vector4d::Zero();
-          row[0] = k;
-          if (g.origin[a] != 0) row[a + 1] = 1;
-          AtA += row * row.transpose();
-          Atb += row * plane;
-        }
-      }
+      for_each_plane([&](int a, double plane, double k) {
+        Eigen::Vector4d row = Eigen::Vector4d::Zero();
+        row[0] = k;
+        if (g.origin[a] != 0) row[a + 1] = 1;
+        AtA += row * row.transpose();
+        Atb += row * plane;
+      });
       if (AtA(0, 0) == 0) break;
       if (!g.origin.isZero()) {
         const Eigen::Vector4d x = AtA.ldlt().solve(Atb);
@@ -89,14 +93,10 @@ std::optional<ExtractionGrid> divide_gap(std::span<const Vec3> points, const std
         }
       }
       double pk = 0, kk = 0;
-      for (int a = 0; a < 3; ++a)
-        for (const double plane : axes[a].planes) {
-          const double p = plane - g.origin[a];
-          const double k = std::round(p / r0);
-          if (std::abs(p / r0 - k) > 0.01) continue;
-          pk += p * k;
-          kk += k * k;
-        }
+      for_each_plane([&](int a, double plane, double k) {
+        pk += (plane - g.origin[a]) * k;
+        kk += k * k;
+      });
       if (kk > 0) g.spacing = pk / kk;
     }
     const double r = g.spacing;
@@ -124,7 +124,7 @@ std::optional<ExtractionGrid> extraction_grid(std::span<const Vec3> points, doub
   // to an axis, off the grid's planes (the walls and floor of a tank), recurs more than any lattice plane and
   // can leave none within a quarter of its count: then the gaps between all 16 most frequent values of each
   // axis are tried (gen splash's first frame).
-  std::array<AxisPlanes, 3> best, all;
+  AxisPlanes best, all;
   std::vector<double> other_gaps;
   double smallest_gap = std::numeric_limits<double>::infinity();
   for (int axis = 0; axis < 3; ++axis) {
@@ -141,11 +141,11 @@ std::optional<ExtractionGrid> extraction_grid(std::span<const Vec3> points, doub
     const std::size_t top = std::min<std::size_t>(16, recurring.size());
     std::partial_sort(recurring.begin(), recurring.begin() + top, recurring.end(), std::greater<>());
     for (std::size_t i = 0; i < top; ++i) {
-      all[axis].planes.push_back(recurring[i].second);
-      if (4 * recurring[i].first >= recurring[0].first) best[axis].planes.push_back(recurring[i].second);
+      all[axis].push_back(recurring[i].second);
+      if (4 * recurring[i].first >= recurring[0].first) best[axis].push_back(recurring[i].second);
     }
-    auto& b = best[axis].planes;
-    auto& v = all[axis].planes;
+    auto& b = best[axis];
+    auto& v = all[axis];
     std::sort(b.begin(), b.end());
     std::sort(v.begin(), v.end());
     for (std::size_t i = 1; i < b.size(); ++i) smallest_gap = std::min(smallest_gap, b[i] - b[i - 1]);
