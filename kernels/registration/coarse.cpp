@@ -454,6 +454,11 @@ CoarseReport align_coarse(SurfaceMesh& mesh, const TargetSurface& target, const 
           snap.stage = CoarseStage::LowDensityLevel;
           params.observer(snap);
         };
+      if (params.match_override)
+        pass.match_override = [&](CoarseMatchRound round, std::vector<Correspondence>& c) {
+          round.stage = CoarseStage::LowDensityLevel;
+          params.match_override(round, c);
+        };
       rep.coarse_pass_iterations = align_coarse(mesh, target, pass).iterations;
     }
   }
@@ -555,6 +560,7 @@ CoarseReport align_coarse(SurfaceMesh& mesh, const TargetSurface& target, const 
     });
     cparams.closest_point = large_motion && rep.levels <= params.closest_point_levels;
     corr = find_correspondences(target, node_x, node_n, cparams);
+    if (params.match_override) params.match_override(CoarseMatchRound{CoarseStage::Level, rep.levels, graph.node_vertex}, corr);
     if (backward) back = find_backward_correspondences(samples, node_x, node_n, params.max_normal_angle_deg);
     if (backward && !backward_all)
       for (std::size_t j = 0; j < nn; ++j)

@@ -15,6 +15,7 @@
 
 #include "kernels/mesh/surface_mesh.hpp"
 #include "kernels/raycast/target_surface.hpp"
+#include "kernels/registration/correspondences.hpp"
 #include "kernels/registration/rigid_icp.hpp"
 #include "kernels/registration/sparse_cholesky.hpp"
 
@@ -44,6 +45,13 @@ struct CoarseSnapshot {
   int rounds = 0;        //!< rounds of the level
   double fit_distance = 0;  //!< mean node-to-correspondence distance after the level, in mean edge lengths
   std::span<const Vec3> positions;
+};
+
+//! What CoarseParams::match_override is told of a round.
+struct CoarseMatchRound {
+  CoarseStage stage = CoarseStage::Level;  //!< LowDensityLevel or Level
+  int level = 1;                           //!< alpha_reg level of the stage, from 1
+  std::span<const Vertex> nodes;           //!< the mesh vertex of each node
 };
 
 struct CoarseParams {
@@ -173,6 +181,9 @@ struct CoarseParams {
   //! Diagnostics: when set, called after the pre-alignment and after every alpha_reg level (then
   //! costs one skinning of the mesh per level); the result does not depend on it.
   std::function<void(const CoarseSnapshot&)> observer;
+  //! Diagnostics (the registration tests' ground-truth experiments): when set, called in every round
+  //! with the round's node correspondences, which it may replace; unset, nothing changes.
+  std::function<void(const CoarseMatchRound&, std::vector<Correspondence>&)> match_override;
 };
 
 //! One correspondence + Gauss–Newton round.

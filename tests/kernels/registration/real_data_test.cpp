@@ -26,7 +26,9 @@ struct Figures {
 // TOPOTRACK_TEST_RETRACT=0|1 (retract_rotations), TOPOTRACK_TEST_CHECK_FIT=0|1 (check_fit_first), and
 // TOPOTRACK_TEST_<NAME>=value for the CoarseParams below (MAX_PCG: max_pcg_iterations, NODE_SPACING:
 // node_spacing_factor), TOPOTRACK_TEST_HISTORY=1
-// (per-round figures), TOPOTRACK_TEST_RIGID_TRUTH=1 (the error of the best rigid motion: pcow 9.5%, elephant 6.0%).
+// (per-round figures), TOPOTRACK_TEST_RIGID_TRUTH=1 (the error of the best rigid motion: pcow 9.5%, elephant 6.0%),
+// TOPOTRACK_TEST_TRUTH_MATCHES=L (each node matched to the closest target point of its ground truth in the
+// first L alpha_reg levels of both stages: what the correspondences cost, docs/results.md).
 void env_double(const char* name, double& value) {
   if (const char* e = std::getenv(name)) value = std::atof(e);
 }
@@ -109,6 +111,19 @@ Figures run_pair(const std::string& name, int frame, int gap, double edge_factor
       test::print_breakdown(label, test::error_breakdown(s.positions, pair, target, truth_index));
     };
   }
+  int truth_levels = 0;
+  env_int("TOPOTRACK_TEST_TRUTH_MATCHES", truth_levels);
+  if (truth_levels > 0)
+    params.match_override = [&](const CoarseMatchRound& round, std::vector<Correspondence>& corr) {
+      if (round.level > truth_levels) return;
+      for (std::size_t j = 0; j < round.nodes.size(); ++j) {
+        const TargetSurface::Hit hit = target.closest_point(pair.truth[round.nodes[j].idx]);
+        corr[j].status = CorrespondenceStatus::Ok;
+        corr[j].point = hit.point;
+        corr[j].normal = hit.normal;
+        corr[j].distance = (mesh.positions()[round.nodes[j].idx] - hit.point).norm();
+      }
+    };
   const CoarseReport c = align_coarse(mesh, target, params);
   if (stages) test::print_breakdown("coarse", test::error_breakdown(mesh.positions(), pair, target, truth_index));
   std::printf("  misfit %.4f of the diagonal, low-density pass %d rounds, prealigned %d (%d ICP steps, %.4f -> %.4f, %.3f s)\n", c.misfit_start, c.coarse_pass_iterations,
