@@ -87,6 +87,9 @@ std::vector<Binding> bindings(TrackerParams& p) {
       {"fine.max_cg_iterations", &p.fine_params.max_cg_iterations, 1, 1e7},
       {"fine.tolerance", &p.fine_params.tolerance, 0, 1},
       {"fine.rounds", &p.fine_params.rounds, 1, 100},
+      {"fine.max_rounds", &p.fine_params.max_rounds, 1, 100},
+      {"fine.more_rounds_residual", &p.fine_params.more_rounds_residual, 0, 1},
+      {"fine.more_rounds_tolerance", &p.fine_params.more_rounds_tolerance, 0, 1},
       {"fine.normal_displacement", &p.fine_params.normal_displacement},
       {"topology.max_region_growth", &p.constrain.max_region_growth, 0, 64},
   };

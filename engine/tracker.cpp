@@ -294,7 +294,9 @@ struct Tracker::Impl {
         }
         if (params.fine) {  // line 6
           const auto t0 = Clock::now();
-          report.fine_iterations = align_fine(mesh, surface, params.fine_params).cg_iterations;
+          const FineReport fine = align_fine(mesh, surface, params.fine_params);
+          report.fine_iterations = fine.cg_iterations;
+          report.fine_rounds = fine.rounds;
           report.seconds.fine += since(t0);
         }
       }

@@ -50,6 +50,7 @@ struct FrameReport {
   //! Why cells were complex in those two calls (ConstrainReport::cells_by_verdict).
   topology::VerdictCounts complex_reasons_self{}, complex_reasons_target{};
   int coarse_iterations = 0, fine_iterations = 0;
+  int fine_rounds = 0;             //!< ray casting + solve rounds of the fine stage (FineParams::max_rounds)
   int coarse_pass_iterations = 0;  //!< rounds of the low-density large-motion pass (0: it did not run)
   //! ConstrainTopology calls that could not produce a valid mesh and were skipped (M kept as it was).
   std::size_t topology_failures = 0;

@@ -5,7 +5,7 @@
 // <= 4 s on 2 cores); the target stays the re-sampled 42k frame. Further arguments: graph density (percent of the paper's) and
 // the cap on PCG iterations per Gauss–Newton round (100: the former default, 15: the current one), and
 // whether the large-motion stages run (rigid pre-alignment, low-density pass and backward matches, by
-// their misfit tests), and the fine stage's form: vector displacements (0, the paper's) or displacements
+// their misfit tests, and up to kLargeMotionFineRounds fine rounds), and the fine stage's form: vector displacements (0, the paper's) or displacements
 // along the vertex normals (1, FineParams::normal_displacement).
 // Counters: vertices, nodes, rounds, PCG iterations and the seconds of graph, correspondences,
 // assembly, factorisation and solve (coarse) and ray casting, assembly and solve (fine). "CPU" is the
@@ -122,6 +122,7 @@ void BM_AlignCoarseFine(benchmark::State& state) {
   override_params(params);
   FineParams fine;
   fine.normal_displacement = state.range(5) != 0;
+  if (state.range(4) != 0) fine.max_rounds = kLargeMotionFineRounds;  // as topotrack align runs it
   CoarseReport c;
   FineReport fr;
   for (auto _ : state) {
@@ -139,6 +140,7 @@ void BM_AlignCoarseFine(benchmark::State& state) {
   state.counters["fine_raycast_s"] = fr.seconds_raycast;
   state.counters["fine_assembly_s"] = fr.seconds_assembly;
   state.counters["fine_solve_s"] = fr.seconds_solve;
+  state.counters["fine_rounds"] = fr.rounds;
   state.counters["coarse_fine_s"] = c.seconds_total + fr.seconds_total;
 }
 // {size, density %, gap, PCG cap, large-motion stages (0: off, 1: the defaults), fine displacements (0: vector,

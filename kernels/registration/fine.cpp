@@ -153,7 +153,7 @@ CgResult solve_cg(const System<K>& sys, const std::vector<VecK<K>>& rhs, std::ve
 // One round for displacements with K coordinates: K = 3, d_i in R^3; K = 1, d_i = t_i n_i.
 template <int K>
 void solve_round(SurfaceMesh& mesh, const Adjacency& adj, const std::vector<Vec3>& normals,
-                 const std::vector<Correspondence>& corr, const FineParams& params, FineReport& rep) {
+                 const std::vector<Correspondence>& corr, const FineParams& params, double tolerance, FineReport& rep) {
   const std::size_t nv = mesh.vertices_size();
   auto& pos = mesh.positions();
   auto t0 = Clock::now();
@@ -186,10 +186,15 @@ void solve_round(SurfaceMesh& mesh, const Adjacency& adj, const std::vector<Vec3
   rep.seconds_assembly += seconds_since(t0);
 
   t0 = Clock::now();
-  const CgResult cg = solve_cg<K>(sys, rhs, d, params.max_cg_iterations, params.tolerance);
+  const CgResult cg = solve_cg<K>(sys, rhs, d, params.max_cg_iterations, tolerance);
   rep.cg_iterations += cg.iterations;
   rep.residual = cg.residual;
   rep.energy_end = energy(d);
+  std::size_t matched = 0;
+  for (std::size_t i = 0; i < nv; ++i) matched += sys.fit[i] > 0;
+  rep.mean_residual = deterministic_sum(nv, [&](std::size_t i) {
+    return Vec3(sys.fit[i] > 0 ? (pos[i] + lift(d[i], i) - corr[i].point).norm() : 0.0, 0, 0);
+  })[0] / double(std::max<std::size_t>(1, matched));
   parallel_each(nv, [&](std::size_t i) {
     const Vec3 step = lift(d[i], i);
     if (!mesh.is_deleted(Vertex(Index(i))) && step.allFinite()) pos[i] += step;
@@ -202,7 +207,8 @@ void solve_round(SurfaceMesh& mesh, const Adjacency& adj, const std::vector<Vec3
 FineReport align_fine(SurfaceMesh& mesh, const TargetSurface& target, const FineParams& params) {
   const auto t_total = Clock::now();
   if (!(params.sigma > 0) || !(params.fit_weight > 0) || !(params.smooth_weight >= 0) ||
-      params.max_cg_iterations < 0 || !(params.tolerance >= 0) || params.rounds < 1)
+      params.max_cg_iterations < 0 || !(params.tolerance >= 0) || params.rounds < 1 || params.max_rounds < 1 ||
+      !(params.more_rounds_residual >= 0) || !(params.more_rounds_tolerance >= 0))
     TT_THROW(InvalidInput, "align_fine: invalid parameters");
   FineReport rep;
   const std::size_t nv = mesh.vertices_size();
@@ -223,18 +229,42 @@ FineReport align_fine(SurfaceMesh& mesh, const TargetSurface& target, const Fine
   cparams.max_distance = params.sigma * D;  // "sigma = 0.1 given a scene bounding box diagonal of 1"
 
   const auto& pos = mesh.positions();
-  for (int round = 0; round < params.rounds; ++round) {
+  const int max_rounds = std::max(params.rounds, params.max_rounds);
+  std::vector<Correspondence> corr;
+  for (int round = 0; round < max_rounds; ++round) {
+    const bool further = round >= params.rounds;
+    if (further && !(rep.mean_residual > params.more_rounds_residual)) break;
     t0 = Clock::now();
     const std::vector<Vec3> normals = vertex_normals(mesh);
-    const std::vector<Correspondence> corr = find_correspondences(target, pos, normals, cparams);
+    if (!further) {
+      corr = find_correspondences(target, pos, normals, cparams);
+    } else {
+      // A further round casts again only from the vertices the last step left farther than the threshold from
+      // their hits, or without one; the others lie on their hits, which their new rays would find again.
+      const double far = params.more_rounds_residual * D;
+      std::vector<Index> again;
+      for (std::size_t i = 0; i < nv; ++i)
+        if (!mesh.is_deleted(Vertex(Index(i))) && (!corr[i].valid() || (pos[i] - corr[i].point).norm() > far))
+          again.push_back(Index(i));
+      std::vector<Vec3> x(again.size()), n(again.size());
+      for (std::size_t k = 0; k < again.size(); ++k) {
+        x[k] = pos[again[k]];
+        n[k] = normals[again[k]];
+      }
+      const std::vector<Correspondence> hits = find_correspondences(target, x, n, cparams);
+      for (std::size_t k = 0; k < again.size(); ++k) corr[again[k]] = hits[k];
+    }
     rep.seconds_raycast += seconds_since(t0);
     std::size_t matched = 0;
     for (std::size_t i = 0; i < nv; ++i)
       if (corr[i].valid() && !mesh.is_deleted(Vertex(Index(i)))) ++matched;
     rep.correspondences = matched;
     rep.pruned = mesh.n_vertices() - matched;
-    if (params.normal_displacement) solve_round<1>(mesh, adj, normals, corr, params, rep);
-    else solve_round<3>(mesh, adj, normals, corr, params, rep);
+    const double tolerance = further ? params.more_rounds_tolerance : params.tolerance;
+    if (params.normal_displacement) solve_round<1>(mesh, adj, normals, corr, params, tolerance, rep);
+    else solve_round<3>(mesh, adj, normals, corr, params, tolerance, rep);
+    rep.mean_residual /= D;
+    rep.rounds = round + 1;
   }
   rep.seconds_total = seconds_since(t_total);
   return rep;

@@ -170,7 +170,7 @@ TEST(TrackerRealData, TheExtractionGridGivesTheInputsTopology) {
   const Vec3 by = pair.grid_spacing * Vec3(0.37, -0.21, 0.29);
   const auto moved = [&](const SurfaceMesh& m) {
     SurfaceMesh out = m.clone();
-    for (Vec3& p : out.positions()) p = (p + by).cast<float>().cast<double>();  // as a PLY stores them
+    for (Vec3& x : out.positions()) x = (x + by).cast<float>().cast<double>();  // as a PLY stores them
     return out;
   };
   Tracker shifted(q);

@@ -451,6 +451,39 @@ TEST(Alignment, FinePrunesBeyondSigma) {
   test::expect_far_sphere_kept(c, before, fr.pruned);
 }
 
+// Further fine rounds while the matched vertices stay far from their hits: a unit sphere onto one with a
+// spike (a Gaussian bump half its radius high), whose tip the smoothness term keeps the first round from
+// reaching. Up to kLargeMotionFineRounds come closer to the target than the paper's one (the default); a
+// target the sphere already lies on takes one round.
+TEST(Alignment, FineRoundsContinueWhileFarFromTheMatches) {
+  const test::Soup sphere = test::icosphere(4, 1.0);
+  test::Soup spiky = test::icosphere(5, 1.0);
+  for (Vec3& p : spiky.positions) p *= 1 + 0.5 * std::exp(-20 * (p - Vec3(0, 0, 1)).squaredNorm());
+  const TargetSurface target(spiky.positions, spiky.triangles);
+  auto distance = [&](const SurfaceMesh& m) {
+    double d = 0;
+    for (const Vec3& p : m.positions()) d += target.closest_point(p).distance;
+    return d / double(m.positions().size()) / target.bbox_diagonal();
+  };
+  SurfaceMesh one = sphere.mesh(), more = sphere.mesh();
+  FineParams large;
+  large.max_rounds = kLargeMotionFineRounds;
+  const FineReport r1 = align_fine(one, target);
+  const FineReport rn = align_fine(more, target, large);
+  EXPECT_EQ(r1.rounds, 1);
+  EXPECT_GT(r1.mean_residual, FineParams{}.more_rounds_residual);
+  EXPECT_GT(rn.rounds, 1);
+  EXPECT_LE(rn.rounds, kLargeMotionFineRounds);
+  EXPECT_LT(rn.mean_residual, r1.mean_residual);
+  EXPECT_LT(distance(more), 0.7 * distance(one)) << distance(more) << " vs " << distance(one);
+
+  SurfaceMesh on = sphere.mesh();
+  const test::Soup same = test::icosphere(5, 1.0);
+  const FineReport r0 = align_fine(on, TargetSurface(same.positions, same.triangles), large);
+  EXPECT_EQ(r0.rounds, 1);
+  EXPECT_LE(r0.mean_residual, FineParams{}.more_rounds_residual);
+}
+
 TEST(Alignment, ComponentsWithoutCounterpartStayFinite) {
   // The target has one component, the mesh two: no NaN, no throw, the matched sphere aligns.
   const test::Soup a = test::icosphere(3, 1.0);
@@ -514,6 +547,12 @@ TEST(Alignment, BadParametersThrow) {
   EXPECT_THROW(align_coarse(c.source, c.target, p), InvalidInput);
   FineParams f;
   f.sigma = -1;
+  EXPECT_THROW(align_fine(c.source, c.target, f), InvalidInput);
+  f = FineParams{};
+  f.max_rounds = 0;
+  EXPECT_THROW(align_fine(c.source, c.target, f), InvalidInput);
+  f = FineParams{};
+  f.more_rounds_residual = std::nan("");
   EXPECT_THROW(align_fine(c.source, c.target, f), InvalidInput);
   p = CoarseParams{};
   p.step_tolerance = -1;
