@@ -13,6 +13,7 @@
 #include "kernels/mesh/mesh_convert.hpp"
 #include "kernels/registration/coarse.hpp"
 #include "kernels/registration/fine.hpp"
+#include "kernels/registration/large_motion.hpp"
 #include "kernels/registration/projection.hpp"
 #include "tools/cli_common.hpp"
 #include "tools/commands.hpp"
@@ -31,7 +32,7 @@ struct AlignOptions {
 // The coarse and fine parameters of the profile, with --set overrides and the stage options on top.
 TrackerParams align_params(const AlignOptions& opt) {
   TrackerParams params = load_profile(opt.profile);
-  if (!opt.no_large_motion) params.fine_params.max_rounds = kLargeMotionFineRounds;
+  if (!opt.no_large_motion) use_large_motion_alignment(params.coarse_params, params.fine_params);
   for (const auto& s : opt.settings) apply_setting(params, s);
   if (opt.graph_density) params.coarse_params.graph_density = *opt.graph_density;
   if (opt.sigma) params.fine_params.sigma = *opt.sigma;
@@ -180,7 +181,7 @@ void add_align_command(CLI::App& app) {
                   "deformation-graph node density relative to the paper's (1, 0.5, 0.25: fast preview)")
       ->check(CLI::Range(1e-3, 1.0));
   sub->add_flag("--no-large-motion", opt->no_large_motion,
-                "the paper's scheme alone: no rigid pre-alignment, no low-density first pass, no backward matches, one fine round");
+                "the paper's scheme alone: no rigid pre-alignment, no low-density first pass, no backward matches, no intrinsic matches, one fine round");
   sub->add_option("--sigma", opt->sigma, "fine-stage pruning distance, fraction of the bbox diagonal")
       ->check(CLI::PositiveNumber);
   sub->add_option("--profile", opt->profile, "bundled profile name or a .json file (default: the paper's values)");

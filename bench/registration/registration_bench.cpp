@@ -5,7 +5,7 @@
 // <= 4 s on 2 cores); the target stays the re-sampled 42k frame. Further arguments: graph density (percent of the paper's) and
 // the cap on PCG iterations per Gauss–Newton round (100: the former default, 15: the current one), and
 // whether the large-motion stages run (rigid pre-alignment, low-density pass and backward matches, by
-// their misfit tests, and up to kLargeMotionFineRounds fine rounds), and the fine stage's form: vector displacements (0, the paper's) or displacements
+// their misfit tests, and what `topotrack align` adds: use_large_motion_alignment), and the fine stage's form: vector displacements (0, the paper's) or displacements
 // along the vertex normals (1, FineParams::normal_displacement).
 // Counters: vertices, nodes, rounds, PCG iterations and the seconds of graph, correspondences,
 // assembly, factorisation and solve (coarse) and ray casting, assembly and solve (fine). "CPU" is the
@@ -35,6 +35,7 @@
 #include "kernels/registration/coarse.hpp"
 #include "kernels/registration/deformation_graph.hpp"
 #include "kernels/registration/fine.hpp"
+#include "kernels/registration/large_motion.hpp"
 #include "tests/kernels/registration/real_data.hpp"
 
 namespace topotrack {
@@ -103,6 +104,8 @@ void override_params(CoarseParams& p) {
       else if (name == "max_iterations_per_level_after_pass") p.max_iterations_per_level_after_pass = int(v);
       else if (name == "node_spacing_factor") p.node_spacing_factor = v;
       else if (name == "alpha_reg_min") p.alpha_reg_min = v;
+      else if (name == "intrinsic_passes") p.intrinsic_passes = int(v);
+      else if (name == "intrinsic_full_graph") p.intrinsic_full_graph = v != 0;
       else std::fprintf(stderr, "TOPOTRACK_BENCH_COARSE: unknown field %s\n", name.c_str());
     }
     at = end + 1;
@@ -119,10 +122,10 @@ void BM_AlignCoarseFine(benchmark::State& state) {
     params.coarse_pass_misfit = 0;
     params.backward_weight = 0;
   }
-  override_params(params);
   FineParams fine;
   fine.normal_displacement = state.range(5) != 0;
-  if (state.range(4) != 0) fine.max_rounds = kLargeMotionFineRounds;  // as topotrack align runs it
+  if (state.range(4) != 0) use_large_motion_alignment(params, fine);  // as topotrack align runs it
+  override_params(params);
   CoarseReport c;
   FineReport fr;
   for (auto _ : state) {
@@ -141,6 +144,9 @@ void BM_AlignCoarseFine(benchmark::State& state) {
   state.counters["fine_assembly_s"] = fr.seconds_assembly;
   state.counters["fine_solve_s"] = fr.seconds_solve;
   state.counters["fine_rounds"] = fr.rounds;
+  state.counters["intrinsic_passes"] = c.intrinsic_passes;
+  state.counters["intrinsic_misplaced"] = double(c.intrinsic_full_graph_misplaced);
+  state.counters["intrinsic_s"] = c.seconds_intrinsic;
   state.counters["coarse_fine_s"] = c.seconds_total + fr.seconds_total;
 }
 // {size, density %, gap, PCG cap, large-motion stages (0: off, 1: the defaults), fine displacements (0: vector,

@@ -16,6 +16,7 @@
 #include "kernels/mesh/surface_mesh.hpp"
 #include "kernels/raycast/target_surface.hpp"
 #include "kernels/registration/correspondences.hpp"
+#include "kernels/registration/intrinsic_matches.hpp"
 #include "kernels/registration/rigid_icp.hpp"
 #include "kernels/registration/sparse_cholesky.hpp"
 
@@ -178,6 +179,17 @@ struct CoarseParams {
   double backward_misfit = 0.003;
   double backward_all_misfit = 0.03;
   int backward_samples_per_node = 16;
+  //! Large motion (our addition, kernels/registration/intrinsic_matches.hpp): after the low-density pass,
+  //! nodes are placed on the target by their geodesic distances to consistently matched anchors; a node
+  //! more than `intrinsic.misplaced_spacings` (low-density) node spacings from its place lies on another
+  //! part (a limb laid where another one is) and follows its place instead of its ray. With
+  //! `intrinsic_full_graph` the full graph's misplaced nodes do so in every round; `intrinsic_passes` first
+  //! runs the low-density pass again, up to that many times while any of its nodes are misplaced, with
+  //! theirs (more accurate, and dearer). Off by default and in the tracker; `topotrack align` sets
+  //! intrinsic_full_graph (kLargeMotionIntrinsic). Measured in docs/results.md (2026-12-01).
+  bool intrinsic_full_graph = false;
+  int intrinsic_passes = 0;
+  IntrinsicParams intrinsic;
   //! Diagnostics: when set, called after the pre-alignment and after every alpha_reg level (then
   //! costs one skinning of the mesh per level); the result does not depend on it.
   std::function<void(const CoarseSnapshot&)> observer;
@@ -185,6 +197,7 @@ struct CoarseParams {
   //! with the round's node correspondences, which it may replace; unset, nothing changes.
   std::function<void(const CoarseMatchRound&, std::vector<Correspondence>&)> match_override;
 };
+
 
 //! One correspondence + Gauss–Newton round.
 struct CoarseRound {
@@ -219,7 +232,11 @@ struct CoarseReport {
   bool prealigned = false;          //!< the rigid pre-alignment ran and was applied
   bool backward = false;            //!< the misfit called for the backward correspondences (pruned nodes)
   bool backward_all = false;        //!< ... at every node
-  int coarse_pass_iterations = 0;   //!< rounds of the low-density pass (0: it did not run)
+  int coarse_pass_iterations = 0;   //!< rounds of the low-density pass, guided ones included (0: it did not run)
+  int intrinsic_passes = 0;         //!< low-density passes run again with intrinsic matches
+  std::size_t intrinsic_misplaced = 0;  //!< the pass's nodes found misplaced after it (intrinsic_passes > 0)
+  std::size_t intrinsic_full_graph_misplaced = 0;  //!< the full graph's nodes that followed their places
+  double seconds_intrinsic = 0;     //!< the intrinsic matches (within seconds_prealign)
   double misfit_start = 0;          //!< trimmed mean closest-point distance before anything / target diagonal
   RigidIcpReport prealign;
   //! The misfit test, the rigid pre-alignment and the low-density pass together (the phase seconds

@@ -10,7 +10,8 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
-#include <queue>
+
+#include "kernels/mesh/edge_graph.hpp"
 
 namespace topotrack {
 namespace {
@@ -25,50 +26,15 @@ constexpr double kSearchRadiusFactor = 2.5;
 // one vertex; at 2 r none. 2 r also holds 5 nodes along a tube thinner than the spacing.
 constexpr double kFirstRadiusFactor = 2.0;
 
-// Vertex adjacency with edge lengths, by vertex handle index (CSR, in edge order).
-struct Adjacency {
-  std::vector<Index> offset, target;
-  std::vector<double> length;
-};
-
-Adjacency build_adjacency(const SurfaceMesh& mesh) {
-  Adjacency a;
-  const std::size_t nv = mesh.vertices_size();
-  a.offset.assign(nv + 1, 0);
-  for (std::size_t e = 0; e < mesh.edges_size(); ++e) {
-    if (mesh.is_deleted(Edge(Index(e)))) continue;
-    ++a.offset[mesh.vertex(Edge(Index(e)), 0).idx + 1];
-    ++a.offset[mesh.vertex(Edge(Index(e)), 1).idx + 1];
-  }
-  for (std::size_t v = 0; v < nv; ++v) a.offset[v + 1] += a.offset[v];
-  a.target.resize(a.offset[nv]);
-  a.length.resize(a.offset[nv]);
-  std::vector<Index> fill(a.offset.begin(), a.offset.end() - 1);
-  for (std::size_t e = 0; e < mesh.edges_size(); ++e) {
-    const Edge edge{Index(e)};
-    if (mesh.is_deleted(edge)) continue;
-    const Vertex u = mesh.vertex(edge, 0), w = mesh.vertex(edge, 1);
-    const double len = (mesh.position(u) - mesh.position(w)).norm();
-    a.target[fill[u.idx]] = w.idx;
-    a.length[fill[u.idx]++] = len;
-    a.target[fill[w.idx]] = u.idx;
-    a.length[fill[w.idx]++] = len;
-  }
-  return a;
-}
-
-using QueueItem = std::pair<double, Index>;
-using MinQueue = std::priority_queue<QueueItem, std::vector<QueueItem>, std::greater<>>;
-
 // Scratch of one bounded Dijkstra run, reset through the list of touched vertices.
 struct DijkstraScratch {
   std::vector<double> dist;
   std::vector<Index> touched;
-  MinQueue queue;
+  DistanceQueue queue;
 };
 
 // Distances from `source` to every vertex within `radius`, as (vertex, distance), in settling order.
-void bounded_dijkstra(const Adjacency& adj, Index source, double radius, DijkstraScratch& s,
+void bounded_dijkstra(const EdgeGraph& adj, Index source, double radius, DijkstraScratch& s,
                       std::vector<std::pair<Index, double>>& out) {
   out.clear();
   s.dist[source] = 0;
@@ -93,40 +59,10 @@ void bounded_dijkstra(const Adjacency& adj, Index source, double radius, Dijkstr
   s.touched.clear();
 }
 
-// Multi-source bounded Dijkstra: lower the geodesic distance field `dist` (kInf where unreached) from
-// the vertices queued, settling no vertex beyond `limit` (inclusive). `dist` persists across calls, so
-// repeated calls grow one field from more and more sources.
-void grow_distances(const Adjacency& adj, double limit, std::vector<double>& dist, MinQueue& queue) {
-  while (!queue.empty()) {
-    const auto [d, u] = queue.top();
-    queue.pop();
-    if (d > dist[u]) continue;
-    for (Index i = adj.offset[u]; i < adj.offset[u + 1]; ++i) {
-      const Index w = adj.target[i];
-      const double nd = d + adj.length[i];
-      if (nd <= limit && nd < dist[w]) {
-        dist[w] = nd;
-        queue.push({nd, w});
-      }
-    }
-  }
-}
-
-// Geodesic Poisson-disk sampling: visit vertices in handle order and make each vertex farther than
-// `spacing` from every node so far a node (coverage: distances strictly below `spacing`).
-std::vector<Vertex> sample_nodes(const SurfaceMesh& mesh, const Adjacency& adj, double spacing) {
-  const std::size_t nv = mesh.vertices_size();
-  const double below_spacing = std::nextafter(spacing, 0.0);
-  std::vector<double> dist(nv, kInf);
+// The nodes: geodesic Poisson-disk samples (a deleted vertex has no live edge, so none is a node).
+std::vector<Vertex> sample_nodes(const EdgeGraph& adj, double spacing) {
   std::vector<Vertex> nodes;
-  MinQueue queue;
-  for (Index v = 0; v < nv; ++v) {
-    if (mesh.is_deleted(Vertex(v)) || adj.offset[v] == adj.offset[v + 1] || dist[v] < spacing) continue;
-    nodes.push_back(Vertex(v));
-    dist[v] = 0;
-    queue.push({0.0, v});
-    grow_distances(adj, below_spacing, dist, queue);
-  }
+  for (const Index v : poisson_disk_samples(adj, spacing)) nodes.push_back(Vertex(v));
   return nodes;
 }
 
@@ -140,7 +76,7 @@ void check_graph_input(const SurfaceMesh& mesh, double spacing) {
 
 std::vector<Vertex> sample_graph_nodes(const SurfaceMesh& mesh, double spacing) {
   check_graph_input(mesh, spacing);
-  return sample_nodes(mesh, build_adjacency(mesh), spacing);
+  return sample_nodes(edge_graph(mesh), spacing);
 }
 
 DeformationGraph build_deformation_graph(const SurfaceMesh& mesh, double spacing, int k) {
@@ -158,7 +94,7 @@ DeformationGraph build_deformation_graph(const SurfaceMesh& mesh, std::vector<Ve
   DeformationGraph g;
   g.k = k;
   g.spacing = spacing;
-  const Adjacency adj = build_adjacency(mesh);
+  const EdgeGraph adj = edge_graph(mesh);
   const std::size_t nv = mesh.vertices_size();
   g.node_vertex = std::move(nodes);
   const std::size_t nn = g.node_vertex.size();
@@ -203,7 +139,7 @@ DeformationGraph build_deformation_graph(const SurfaceMesh& mesh, std::vector<Ve
   count();
   {
     std::vector<double> dist(nv, kInf);
-    MinQueue queue;
+    DistanceQueue queue;
     for (Index v = 0; v < nv; ++v)
       if (counter[v].load(std::memory_order_relaxed) <= K && adj.offset[v] != adj.offset[v + 1] &&
           !mesh.is_deleted(Vertex(v))) {

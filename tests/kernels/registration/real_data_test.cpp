@@ -12,6 +12,7 @@
 
 #include "kernels/registration/coarse.hpp"
 #include "kernels/registration/fine.hpp"
+#include "kernels/registration/large_motion.hpp"
 #include "kernels/registration/projection.hpp"
 #include "tests/kernels/registration/real_data.hpp"
 
@@ -27,7 +28,8 @@ struct Figures {
 // TOPOTRACK_TEST_<NAME>=value for the CoarseParams below (MAX_PCG: max_pcg_iterations, NODE_SPACING:
 // node_spacing_factor), TOPOTRACK_TEST_HISTORY=1
 // (per-round figures), TOPOTRACK_TEST_RIGID_TRUTH=1 (the error of the best rigid motion: pcow 9.5%, elephant 6.0%),
-// TOPOTRACK_TEST_FINE_ROUNDS=n, TOPOTRACK_TEST_FINE_MAX_ROUNDS=n, TOPOTRACK_TEST_FINE_MORE_RESIDUAL=x (FineParams),
+// TOPOTRACK_TEST_INTRINSIC=0|1, TOPOTRACK_TEST_INTRINSIC_PASSES=n (CoarseParams::intrinsic_full_graph,
+// intrinsic_passes), TOPOTRACK_TEST_INTRINSIC_ANCHORS=n, TOPOTRACK_TEST_INTRINSIC_MISPLACED=x, TOPOTRACK_TEST_FINE_ROUNDS=n, TOPOTRACK_TEST_FINE_MAX_ROUNDS=n, TOPOTRACK_TEST_FINE_MORE_RESIDUAL=x (FineParams),
 // TOPOTRACK_TEST_TRUTH_MATCHES=L (each node matched to the closest target point of its ground truth in the
 // first L alpha_reg levels of both stages: what the correspondences cost, docs/results.md).
 void env_double(const char* name, double& value) {
@@ -64,7 +66,13 @@ Figures run_pair(const std::string& name, int frame, int gap, double edge_factor
   project_to_closest(projected, target);
   f.projected = test::alignment_error(projected, pair.truth, target, pair.diagonal);
   SurfaceMesh mesh = pair.source.clone();
-  CoarseParams params;
+  CoarseParams params;  // as topotrack align runs it (fine: below)
+  FineParams fine;
+  use_large_motion_alignment(params, fine);
+  if (const char* e = std::getenv("TOPOTRACK_TEST_INTRINSIC")) params.intrinsic_full_graph = std::atoi(e) != 0;
+  env_int("TOPOTRACK_TEST_INTRINSIC_PASSES", params.intrinsic_passes);
+  env_int("TOPOTRACK_TEST_INTRINSIC_ANCHORS", params.intrinsic.anchors);
+  env_double("TOPOTRACK_TEST_INTRINSIC_MISPLACED", params.intrinsic.misplaced_spacings);
   if (const char* e = std::getenv("TOPOTRACK_TEST_CHOLESKY"); e && std::string(e) == "eigen")
     params.solver = CholeskyBackend::EigenLDLT;
   if (std::getenv("TOPOTRACK_TEST_DIRECT")) params.linear_solver = CoarseLinearSolver::Direct;
@@ -127,11 +135,11 @@ Figures run_pair(const std::string& name, int frame, int gap, double edge_factor
     };
   const CoarseReport c = align_coarse(mesh, target, params);
   if (stages) test::print_breakdown("coarse", test::error_breakdown(mesh.positions(), pair, target, truth_index));
-  std::printf("  misfit %.4f of the diagonal, low-density pass %d rounds, prealigned %d (%d ICP steps, %.4f -> %.4f, %.3f s)\n", c.misfit_start, c.coarse_pass_iterations,
+  std::printf("  misfit %.4f of the diagonal, low-density pass %d rounds, prealigned %d (%d ICP steps, %.4f -> %.4f, %.3f s); "
+              "intrinsic: %zu full-graph nodes misplaced, %d guided passes, %.3f s\n", c.misfit_start, c.coarse_pass_iterations,
               int(c.prealigned), c.prealign.iterations, c.prealign.distance_start / pair.diagonal,
-              c.prealign.distance_end / pair.diagonal, c.seconds_prealign);
-  FineParams fine;  // as topotrack align runs it
-  fine.max_rounds = kLargeMotionFineRounds;
+              c.prealign.distance_end / pair.diagonal, c.seconds_prealign, c.intrinsic_full_graph_misplaced, c.intrinsic_passes,
+              c.seconds_intrinsic);
   env_int("TOPOTRACK_TEST_FINE_ROUNDS", fine.rounds);
   env_int("TOPOTRACK_TEST_FINE_MAX_ROUNDS", fine.max_rounds);
   env_double("TOPOTRACK_TEST_FINE_MORE_RESIDUAL", fine.more_rounds_residual);
