@@ -260,7 +260,9 @@ TEST(RealData, SambaConsecutiveFrames) {
 }
 TEST(RealData, ElephantLargeMotion) {
   TOPOTRACK_REQUIRE_DATA("elephant");
-  // Median 3.42% of 6.25% (2026-12-01; 3.40% with one fine round), 3.88% at 78d1eea (3.09% at b4100c4, whose re-sampled targets differ; one re-sampling at
+  // Median 1.44% of 6.25% (2026-12-01, with the intrinsic matches in the full graph; 1.01% with two guided
+  // low-density passes too, TOPOTRACK_TEST_INTRINSIC_PASSES=2; 3.42% without them, TOPOTRACK_TEST_INTRINSIC=0,
+  // and 3.40% with one fine round), 3.88% at 78d1eea (3.09% at b4100c4, whose re-sampled targets differ; one re-sampling at
   // 0.8 before b4100c4: 3.41%; misfit 0.57%: the low-density
   // pass and backward matches at the pruned nodes, no pre-alignment); 4.27% without the backward matches
   // (TOPOTRACK_TEST_BACKWARD_WEIGHT=0;
@@ -270,7 +272,9 @@ TEST(RealData, ElephantLargeMotion) {
   // the two legs that swing (feet 10% apart in the ground truth: 9-10% left after alignment, 9% of the
   // vertices landing on another part).
   const Figures f = run_resampled("elephant", 1, 15);
-  expect_improvement(f, 0.65);
+  expect_improvement(f, 0.3);
+  EXPECT_LE(f.aligned.mean_truth, 0.02);
+  EXPECT_GT(last_coarse.intrinsic_full_graph_misplaced, 0u);  // measured 127-266 nodes over the five re-samplings
   EXPECT_FALSE(last_coarse.prealigned);
   EXPECT_TRUE(last_coarse.backward);
   EXPECT_FALSE(last_coarse.backward_all);
