@@ -39,7 +39,8 @@ struct FineParams {
 };
 
 //! FineParams::max_rounds for large motion (`topotrack align`, unless --no-large-motion). Measured, frame 1 -> 16,
-//! the run of median ground-truth error over five re-samplings of the target (docs/results.md, 2026-12-01),
+//! the run of median ground-truth error over five re-samplings of the target (docs/results.md, 2026-12-01; before
+//! the intrinsic matches, with which the elephant takes 4-6 rounds),
 //! distance to the target in % of the diagonal, one round -> up to 8: pcow 0.29 -> 0.045 (8 rounds; 0.045-0.079
 //! over the five), elephant 0.13 -> 0.036 (6; 0.036-0.060), samba 0.021 (one round: its residual is 0.025 %); the
 //! ground-truth error pcow 3.50 -> 3.47, elephant 3.40 -> 3.42; bench/registration gap 15 (the elephant at 47k and
