@@ -10,12 +10,12 @@
 #include <limits>
 #include <optional>
 
+#include "kernels/mesh/edge_graph.hpp"
 #include "kernels/mesh/mesh_queries.hpp"
 #include "kernels/registration/block_cholesky.hpp"
 #include "kernels/registration/correspondences.hpp"
 #include "kernels/registration/deformation_graph.hpp"
 #include "kernels/registration/intrinsic_matches.hpp"
-#include "kernels/mesh/edge_graph.hpp"
 
 namespace topotrack {
 namespace {
@@ -415,7 +415,7 @@ struct NodeGuide {
 CoarseReport align_coarse_impl(SurfaceMesh& mesh, const TargetSurface& target, const CoarseParams& params,
                                const NodeGuide* guide);
 
-// The large-motion intrinsic stage (CoarseParams::intrinsic, intrinsic_passes), after the low-density pass
+// The large-motion intrinsic stage (CoarseParams::intrinsic_full_graph, intrinsic_passes), after the low-density pass
 // `pass`: nodes are placed by their geodesic distances (intrinsic_matches.hpp); up to intrinsic_passes times,
 // while some of the pass's nodes are misplaced, the pass runs again with their places as their matches; then
 // the full graph's misplaced nodes get theirs (the guide returned, for the full graph's rounds).
@@ -572,7 +572,7 @@ CoarseReport align_coarse_impl(SurfaceMesh& mesh, const TargetSurface& target, c
   cparams.closest_point = large_motion && params.closest_point_levels > 0;
 
   t0 = Clock::now();
-  if (full_guide) guide = &*full_guide;
+  if (full_guide) guide = &*full_guide;  // the intrinsic stage's matches for the full graph's nodes
   const double spacing = guide ? guide->spacing : params.node_spacing_factor * edge / std::sqrt(params.graph_density);
   std::vector<Vertex> nodes = guide ? guide->nodes : sample_graph_nodes(mesh, spacing);
   rep.node_spacing = spacing;

@@ -7,8 +7,9 @@
 //! with the correspondence search; alpha_reg starts at 1000 and is divided by 10 whenever converged.
 //! Lengths are measured relative to the scene's bounding-box diagonal (the paper assumes a diagonal of 1).
 //! For large motion (our addition, gated by the measured misfit so that close frames keep the paper's
-//! scheme): a global rigid pre-alignment (rigid_icp.hpp), a first pass on a lower-density graph, and
-//! backward (target -> node) matches added to the fitting term.
+//! scheme): a global rigid pre-alignment (rigid_icp.hpp), a first pass on a lower-density graph,
+//! backward (target -> node) matches added to the fitting term, and (when asked for, as `topotrack align`
+//! does) intrinsic matches for the nodes laid on the wrong part (intrinsic_matches.hpp).
 #include <functional>
 #include <span>
 #include <vector>
