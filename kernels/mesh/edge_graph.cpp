@@ -1,6 +1,10 @@
 #include "kernels/mesh/edge_graph.hpp"
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
+#include <array>
 #include <bit>
 #include <cmath>
 #include <cstdint>
@@ -82,30 +86,133 @@ void grow_distances(const EdgeGraph& graph, double limit, std::vector<double>& d
   }
 }
 
-void geodesic_distances(const EdgeGraph& graph, Index source, std::vector<float>& dist) {
-  // A non-negative float's bits order as its value: (bits << 32 | vertex) orders by distance, then vertex.
-  const auto key = [](float d, Index v) { return (std::uint64_t(std::bit_cast<std::uint32_t>(d)) << 32) | v; };
-  dist.assign(graph.n_vertices(), std::numeric_limits<float>::infinity());
-  std::vector<std::uint64_t> heap;
-  heap.reserve(2 * graph.n_vertices());
-  std::priority_queue<std::uint64_t, std::vector<std::uint64_t>, std::greater<>> queue(std::greater<>{}, std::move(heap));
+namespace {
+
+// A monotone priority queue of (32-bit key, vertex): a radix heap (Ahuja, Mehlhorn, Orlin and Tarjan
+// 1990). Dijkstra only ever pushes keys at or above the last one popped, so an item goes to the bucket
+// of the highest bit in which its key differs from that last key, and a pop only redistributes the
+// smallest non-empty bucket. It pops in key order, among equal keys in any order, which does not change
+// a distance field: each vertex relaxes its edges once, with its final distance (test
+// EdgeGraph.DistanceFieldsAreExactlyDijkstrasOnAnyThreadCount compares with a binary heap's, bit for bit).
+class RadixQueue {
+public:
+  bool empty() const { return size_ == 0; }
+  void push(std::uint32_t key, Index v) {
+    bucket_[bucket_of(key)].push_back({key, v});
+    ++size_;
+  }
+  std::pair<std::uint32_t, Index> pop() {
+    if (bucket_[0].empty()) {
+      std::size_t b = 1;
+      while (bucket_[b].empty()) ++b;
+      std::vector<Item>& from = bucket_[b];
+      last_ = std::min_element(from.begin(), from.end(), [](const Item& x, const Item& y) { return x.key < y.key; })->key;
+      for (const Item& item : from) bucket_[bucket_of(item.key)].push_back(item);
+      from.clear();
+    }
+    const Item top = bucket_[0].back();
+    bucket_[0].pop_back();
+    --size_;
+    return {top.key, top.vertex};
+  }
+
+private:
+  struct Item {
+    std::uint32_t key;
+    Index vertex;
+  };
+  std::size_t bucket_of(std::uint32_t key) const { return key == last_ ? 0 : std::size_t(32 - std::countl_zero(key ^ last_)); }
+  std::array<std::vector<Item>, 33> bucket_;
+  std::uint32_t last_ = 0;
+  std::size_t size_ = 0;
+};
+
+// The graph as the distance fields walk it, built once for a batch of sources: vertices renumbered in
+// breadth-first order, so that the rows a Dijkstra front visits lie near each other in memory, and each
+// row's arcs as (neighbour, single-precision length) pairs. The walk is bound by memory, not by its
+// queue: on the elephant at 98k vertices the mesh's own numbering puts an edge's ends a mean 32k indices
+// apart, this one 330. With the radix heap, 32 fields take 0.78 of the time of a binary heap of packed
+// keys on the mesh's own layout (bench BM_GeodesicDistances, 98k, 1 thread: 493 -> 386 ms; 2 threads
+// 238-273 -> 194-197 ms).
+struct WalkGraph {
+  struct Arc {
+    Index to;
+    float length;
+  };
+  std::vector<Index> offset;  // by new number
+  std::vector<Arc> arc;
+  std::vector<Index> vertex;  // new number -> vertex
+  std::vector<Index> number;  // vertex -> new number
+};
+
+WalkGraph walk_graph(const EdgeGraph& graph) {
+  const std::size_t n = graph.n_vertices();
+  WalkGraph w;
+  w.number.assign(n, kInvalidIndex);
+  w.vertex.reserve(n);
+  for (Index root = 0; root < n; ++root) {
+    if (w.number[root] != kInvalidIndex) continue;
+    w.number[root] = Index(w.vertex.size());
+    w.vertex.push_back(root);
+    for (std::size_t head = w.vertex.size() - 1; head < w.vertex.size(); ++head) {
+      const Index u = w.vertex[head];
+      for (Index i = graph.offset[u]; i < graph.offset[u + 1]; ++i)
+        if (const Index t = graph.target[i]; w.number[t] == kInvalidIndex) {
+          w.number[t] = Index(w.vertex.size());
+          w.vertex.push_back(t);
+        }
+    }
+  }
+  w.offset.assign(n + 1, 0);
+  w.arc.reserve(graph.target.size());
+  for (std::size_t k = 0; k < n; ++k) {
+    const Index u = w.vertex[k];
+    for (Index i = graph.offset[u]; i < graph.offset[u + 1]; ++i)
+      w.arc.push_back({w.number[graph.target[i]], float(graph.length[i])});
+    w.offset[k + 1] = Index(w.arc.size());
+  }
+  return w;
+}
+
+// Dijkstra from new number `source` over `g`, into `dist` by new number.
+void walk_distances(const WalkGraph& g, Index source, std::vector<float>& dist) {
+  // A non-negative float's bits order as its value, so they are the queue's keys.
+  dist.assign(g.vertex.size(), std::numeric_limits<float>::infinity());
+  RadixQueue queue;
   dist[source] = 0;
-  queue.push(key(0, source));
+  queue.push(0, source);
   while (!queue.empty()) {
-    const std::uint64_t top = queue.top();
-    queue.pop();
-    const Index u = Index(top & 0xffffffffu);
-    const float d = std::bit_cast<float>(std::uint32_t(top >> 32));
+    const auto [key, u] = queue.pop();
+    const float d = std::bit_cast<float>(key);
     if (d > dist[u]) continue;
-    for (Index i = graph.offset[u]; i < graph.offset[u + 1]; ++i) {
-      const Index w = graph.target[i];
-      const float nd = d + float(graph.length[i]);
-      if (nd < dist[w]) {
-        dist[w] = nd;
-        queue.push(key(nd, w));
+    for (Index i = g.offset[u]; i < g.offset[u + 1]; ++i) {
+      const WalkGraph::Arc a = g.arc[i];
+      const float nd = d + a.length;
+      if (nd < dist[a.to]) {
+        dist[a.to] = nd;
+        queue.push(std::bit_cast<std::uint32_t>(nd), a.to);
       }
     }
   }
+}
+
+}  // namespace
+
+std::vector<std::vector<float>> geodesic_distances(const EdgeGraph& graph, std::span<const Index> sources) {
+  for (const Index s : sources)
+    if (s >= graph.n_vertices()) TT_THROW(InvalidInput, "geodesic distances: source " << s << " out of range");
+  std::vector<std::vector<float>> out(sources.size());
+  if (sources.empty()) return out;
+  const WalkGraph g = walk_graph(graph);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, sources.size(), 1), [&](const auto& r) {
+    std::vector<float> local;
+    for (std::size_t a = r.begin(); a != r.end(); ++a) {
+      walk_distances(g, g.number[sources[a]], local);
+      out[a].resize(local.size());
+      for (std::size_t k = 0; k < local.size(); ++k) out[a][g.vertex[k]] = local[k];
+    }
+  });
+  return out;
 }
 
 std::vector<Index> poisson_disk_samples(const EdgeGraph& graph, double spacing) {

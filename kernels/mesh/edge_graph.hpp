@@ -37,10 +37,12 @@ using DistanceQueue = std::priority_queue<DistanceItem, std::vector<DistanceItem
 //! calls grow one field from more and more sources.
 void grow_distances(const EdgeGraph& graph, double limit, std::vector<double>& dist, DistanceQueue& queue);
 
-//! Distances from `source` to every vertex (infinity where unreached), resized to n_vertices(), in single
-//! precision: a heap of packed (distance, vertex) keys, about twice as fast as grow_distances' (what the
-//! intrinsic matches need, 64 fields per alignment; the deformation graph keeps grow_distances').
-void geodesic_distances(const EdgeGraph& graph, Index source, std::vector<float>& dist);
+//! Distances from each of `sources` to every vertex: [s][v], infinity where unreached, in single
+//! precision (what the intrinsic matches need, 32 fields per surface; the deformation graph keeps
+//! grow_distances'). In parallel over the sources, on a copy of the graph laid out for the walk (built
+//! once per call: pass all sources at once); each field is exactly a Dijkstra's over the graph in float
+//! arithmetic, whatever the thread count. \throw InvalidInput on a source out of range.
+std::vector<std::vector<float>> geodesic_distances(const EdgeGraph& graph, std::span<const Index> sources);
 
 //! Geodesic Poisson-disk sampling: visit vertices in index order and make each non-isolated vertex
 //! farther than `spacing` from every sample so far a sample (coverage: distances strictly below

@@ -50,10 +50,7 @@ IntrinsicAnchors intrinsic_anchors(const EdgeGraph& source, std::span<const Inde
     next = std::size_t(std::max_element(nearest.begin(), nearest.end()) - nearest.begin());
     if (!(nearest[next] > 0)) break;  // every candidate is an anchor
   }
-  out.distance.resize(out.anchor.size());
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, out.anchor.size(), 1), [&](const auto& r) {
-    for (std::size_t a = r.begin(); a != r.end(); ++a) geodesic_distances(source, out.anchor[a], out.distance[a]);
-  });
+  out.distance = geodesic_distances(source, out.anchor);
   return out;
 }
 
@@ -80,10 +77,7 @@ IntrinsicMatches intrinsic_matches(const IntrinsicAnchors& anchors, std::span<co
   // The anchors' current matches on the target, and the target's distances from them: dt[a][t].
   std::vector<Index> m(A);
   for (std::size_t a = 0; a < A; ++a) m[a] = nearest_target_vertex(target, anchor_x[a]);
-  std::vector<std::vector<float>> dt(A);
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, A, 1), [&](const auto& r) {
-    for (std::size_t a = r.begin(); a != r.end(); ++a) geodesic_distances(target_graph, m[a], dt[a]);
-  });
+  const std::vector<std::vector<float>> dt = geodesic_distances(target_graph, m);
 
   // Consistency of the anchors' matches: the worst anchor dropped until each agrees with most others.
   std::vector<char> kept(A, 1);

@@ -2,10 +2,18 @@
 // (kernels/mesh/edge_graph.hpp) on small closed shapes.
 #include <gtest/gtest.h>
 
+#include <tbb/global_control.h>
+
 #include <Eigen/Geometry>
+#include <algorithm>
+#include <bit>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <numbers>
+#include <numeric>
+#include <queue>
+#include <random>
 #include <vector>
 
 #include "kernels/mesh/edge_graph.hpp"
@@ -35,21 +43,23 @@ TEST(EdgeGraph, DistancesAlongTheSurface) {
     if (s.positions[v].z() > s.positions[north].z()) north = v;
     if (s.positions[v].z() < s.positions[south].z()) south = v;
   }
-  std::vector<float> d;
-  geodesic_distances(g, north, d);
+  std::vector<float> d = geodesic_distances(g, std::vector<Index>{north})[0];
   EXPECT_EQ(d[north], 0.0f);
   EXPECT_GT(d[south], 0.99 * std::numbers::pi);
   EXPECT_LT(d[south], 1.10 * std::numbers::pi);
   // Another component is unreached.
   test::Soup two = test::merge(s, test::icosphere(1, 0.2, Vec3(5, 0, 0)));
-  geodesic_distances(edge_graph(two.positions, two.triangles), north, d);
+  d = geodesic_distances(edge_graph(two.positions, two.triangles), std::vector<Index>{north})[0];
   EXPECT_TRUE(std::isinf(d.back()));
   // Poisson-disk samples: no two closer than the spacing, every vertex within it of one.
   const double spacing = 0.5;
   const std::vector<Index> samples = poisson_disk_samples(g, spacing);
   std::vector<float> nearest(g.n_vertices(), std::numeric_limits<float>::infinity());
-  for (const Index a : samples) {
-    geodesic_distances(g, a, d);
+  const std::vector<std::vector<float>> from_samples = geodesic_distances(g, samples);
+  ASSERT_EQ(from_samples.size(), samples.size());
+  for (std::size_t i = 0; i < samples.size(); ++i) {
+    const Index a = samples[i];
+    d = from_samples[i];
     for (const Index b : samples) {
       if (b == a) continue;
       EXPECT_GE(d[b], spacing * (1 - 1e-6));
@@ -108,6 +118,64 @@ TEST(IntrinsicMatches, FindAndPlaceACapLaidOnAnotherPart) {
   const IntrinsicMatches none = intrinsic_matches(anchors, anchor_truth, nodes, truth, target, target_graph, spacing);
   EXPECT_EQ(none.misplaced, 0u);
   EXPECT_EQ(none.kept, none.anchors);
+}
+
+// A textbook Dijkstra in float arithmetic (binary heap of (distance, vertex), the mesh's own numbering):
+// what geodesic_distances must reproduce exactly, whatever its queue, layout or thread count.
+std::vector<float> reference_distances(const EdgeGraph& g, Index source) {
+  std::vector<float> dist(g.n_vertices(), std::numeric_limits<float>::infinity());
+  std::priority_queue<std::pair<float, Index>, std::vector<std::pair<float, Index>>, std::greater<>> queue;
+  dist[source] = 0;
+  queue.push({0.0f, source});
+  while (!queue.empty()) {
+    const auto [d, u] = queue.top();
+    queue.pop();
+    if (d > dist[u]) continue;
+    for (Index i = g.offset[u]; i < g.offset[u + 1]; ++i)
+      if (const float nd = d + float(g.length[i]); nd < dist[g.target[i]]) {
+        dist[g.target[i]] = nd;
+        queue.push({nd, g.target[i]});
+      }
+  }
+  return dist;
+}
+
+TEST(EdgeGraph, DistanceFieldsAreExactlyDijkstrasOnAnyThreadCount) {
+  // Two components (one unreached from the other), the vertices numbered at random (as a resampled
+  // mesh's are), edges of many lengths (a stretched, jittered sphere), and a repeated source.
+  test::Soup s = test::merge(test::icosphere(4, 1.0), test::icosphere(2, 0.3, Vec3(3, 0, 0)));
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> jitter(-0.01, 0.01);
+  for (Vec3& p : s.positions) p = Vec3(2.0 * p.x(), p.y(), 0.5 * p.z()) + Vec3(jitter(rng), jitter(rng), jitter(rng));
+  std::vector<Index> perm(s.positions.size());
+  std::iota(perm.begin(), perm.end(), Index(0));
+  std::shuffle(perm.begin(), perm.end(), rng);
+  std::vector<Vec3> shuffled(s.positions.size());
+  for (std::size_t v = 0; v < perm.size(); ++v) shuffled[perm[v]] = s.positions[v];
+  for (auto& t : s.triangles)
+    for (Index& v : t) v = perm[v];
+  s.positions = shuffled;
+  const EdgeGraph g = edge_graph(s.positions, s.triangles);
+  const std::vector<Index> sources = {0, 17, Index(g.n_vertices() - 1), 17, Index(g.n_vertices() / 2)};
+  std::vector<std::vector<float>> by_threads[2];
+  for (int threads = 1; threads <= 2; ++threads) {
+    const tbb::global_control limit(tbb::global_control::max_allowed_parallelism, std::size_t(threads));
+    by_threads[threads - 1] = geodesic_distances(g, sources);
+  }
+  ASSERT_EQ(by_threads[0].size(), sources.size());
+  std::size_t unreached = 0;
+  for (std::size_t a = 0; a < sources.size(); ++a) {
+    const std::vector<float> ref = reference_distances(g, sources[a]);
+    ASSERT_EQ(by_threads[0][a].size(), ref.size());
+    for (std::size_t v = 0; v < ref.size(); ++v) {
+      ASSERT_EQ(std::bit_cast<std::uint32_t>(by_threads[0][a][v]), std::bit_cast<std::uint32_t>(ref[v])) << a << " " << v;
+      ASSERT_EQ(std::bit_cast<std::uint32_t>(by_threads[1][a][v]), std::bit_cast<std::uint32_t>(ref[v])) << a << " " << v;
+      unreached += std::isinf(ref[v]);
+    }
+  }
+  EXPECT_GT(unreached, 0u);  // the other component
+  EXPECT_TRUE(geodesic_distances(g, std::vector<Index>{}).empty());
+  EXPECT_THROW(geodesic_distances(g, std::vector<Index>{Index(g.n_vertices())}), InvalidInput);
 }
 
 TEST(IntrinsicMatches, BadInputThrows) {
