@@ -312,6 +312,21 @@ BENCHMARK(BM_GeodesicDistances)
     ->UseRealTime()
     ->MeasureProcessCPUTime();
 
+// Angle-weighted vertex normals of the elephant's source at 47k and 98k vertices (each fine round, the
+// rigid pre-alignment and the tracker's every frame compute them), on 1 or 2 threads.
+void BM_VertexNormals(benchmark::State& state) {
+  const Fixture& f = fixture(int(state.range(0)), 15);
+  const tbb::global_control threads(tbb::global_control::max_allowed_parallelism, std::size_t(state.range(1)));
+  for (auto _ : state) benchmark::DoNotOptimize(vertex_normals(f.source).data());
+  state.counters["vertices"] = double(f.source.n_vertices());
+}
+BENCHMARK(BM_VertexNormals)
+    ->ArgsProduct({{2, 3}, {1, 2}})
+    ->ArgNames({"size", "threads"})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime()
+    ->MeasureProcessCPUTime();
+
 // One Gauss–Newton round with either backend: the time of one numeric factorisation.
 void BM_Factorisation(benchmark::State& state) {
   const Fixture& f = fixture(int(state.range(0)), 15);

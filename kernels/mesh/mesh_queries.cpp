@@ -1,6 +1,10 @@
 #include "kernels/mesh/mesh_queries.hpp"
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <numeric>
 
@@ -40,21 +44,50 @@ double face_area(const SurfaceMesh& m, Face f) {
 }
 
 std::vector<Vec3> vertex_normals(const SurfaceMesh& m) {
-  std::vector<Vec3> n(m.vertices_size(), Vec3::Zero());
-  for (Index f = 0; f < m.faces_size(); ++f) {
-    if (m.is_deleted(Face(f))) continue;
-    const auto t = m.vertices(Face(f));
-    const Vec3 fn = face_normal(m, Face(f));
-    for (int k = 0; k < 3; ++k) {
-      const Vec3& p = m.position(t[k]);
-      const double a = angle_between(m.position(t[(k + 1) % 3]) - p, m.position(t[(k + 2) % 3]) - p);
-      n[t[k].idx] += a * fn;
+  // Each face's corner terms (angle times face normal) in parallel; then each vertex sums its terms in
+  // ascending face order, in parallel over vertices: the same additions in the same order as one loop
+  // over the faces, so the normals are bit for bit those of the serial sum on any thread count. The
+  // serial sum scattered its additions over the whole array (80 ms at 98k vertices, BM_VertexNormals).
+  const std::size_t nf = m.faces_size(), nv = m.vertices_size();
+  std::vector<std::array<Vertex, 3>> corner(nf);
+  std::vector<Vec3> term(3 * nf);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nf, 2048), [&](const auto& r) {
+    for (std::size_t f = r.begin(); f != r.end(); ++f) {
+      if (m.is_deleted(Face(Index(f)))) {
+        corner[f] = {Vertex(), Vertex(), Vertex()};
+        continue;
+      }
+      const auto t = m.vertices(Face(Index(f)));
+      corner[f] = t;
+      const Vec3 fn = face_normal(m, Face(Index(f)));
+      for (int k = 0; k < 3; ++k) {
+        const Vec3& p = m.position(t[k]);
+        term[3 * f + std::size_t(k)] = angle_between(m.position(t[(k + 1) % 3]) - p, m.position(t[(k + 2) % 3]) - p) * fn;
+      }
     }
+  });
+  // Each vertex's terms, in face order (a counting sort by vertex).
+  std::vector<Index> offset(nv + 1, 0);
+  for (const auto& t : corner)
+    for (const Vertex v : t)
+      if (v.is_valid()) ++offset[v.idx + 1];
+  for (std::size_t v = 0; v < nv; ++v) offset[v + 1] += offset[v];
+  std::vector<Index> terms(offset[nv]);
+  {
+    std::vector<Index> fill(offset.begin(), offset.end() - 1);
+    for (std::size_t f = 0; f < nf; ++f)
+      for (std::size_t k = 0; k < 3; ++k)
+        if (const Vertex v = corner[f][k]; v.is_valid()) terms[fill[v.idx]++] = Index(3 * f + k);
   }
-  for (auto& v : n) {
-    const double len = v.norm();
-    if (len > 0) v /= len;
-  }
+  std::vector<Vec3> n(nv, Vec3::Zero());
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv, 2048), [&](const auto& r) {
+    for (std::size_t v = r.begin(); v != r.end(); ++v) {
+      Vec3 sum = Vec3::Zero();
+      for (Index q = offset[v]; q < offset[v + 1]; ++q) sum += term[terms[q]];
+      const double len = sum.norm();
+      n[v] = len > 0 ? Vec3(sum / len) : sum;
+    }
+  });
   return n;
 }
 

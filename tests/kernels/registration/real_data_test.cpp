@@ -29,7 +29,8 @@ struct Figures {
 // node_spacing_factor), TOPOTRACK_TEST_HISTORY=1
 // (per-round figures), TOPOTRACK_TEST_RIGID_TRUTH=1 (the error of the best rigid motion: pcow 9.5%, elephant 6.0%),
 // TOPOTRACK_TEST_INTRINSIC=0|1, TOPOTRACK_TEST_INTRINSIC_PASSES=n (CoarseParams::intrinsic_full_graph,
-// intrinsic_passes), TOPOTRACK_TEST_INTRINSIC_ANCHORS=n, TOPOTRACK_TEST_INTRINSIC_MISPLACED=x, TOPOTRACK_TEST_FINE_ROUNDS=n, TOPOTRACK_TEST_FINE_MAX_ROUNDS=n, TOPOTRACK_TEST_FINE_MORE_RESIDUAL=x (FineParams),
+// intrinsic_passes), TOPOTRACK_TEST_INTRINSIC_ANCHORS=n, TOPOTRACK_TEST_INTRINSIC_MISPLACED=x, TOPOTRACK_TEST_FINE_ROUNDS=n, TOPOTRACK_TEST_FINE_MAX_ROUNDS=n, TOPOTRACK_TEST_FINE_MORE_RESIDUAL=x, TOPOTRACK_TEST_FINE_NORMAL_ANGLE=deg,
+// TOPOTRACK_TEST_FINE_NORMAL_DISPLACEMENT=0|1 (FineParams),
 // TOPOTRACK_TEST_TRUTH_MATCHES=L (each node matched to the closest target point of its ground truth in the
 // first L alpha_reg levels of both stages: what the correspondences cost, docs/results.md).
 void env_double(const char* name, double& value) {
@@ -144,6 +145,8 @@ Figures run_pair(const std::string& name, int frame, int gap, double edge_factor
   env_int("TOPOTRACK_TEST_FINE_MAX_ROUNDS", fine.max_rounds);
   env_double("TOPOTRACK_TEST_FINE_MORE_RESIDUAL", fine.more_rounds_residual);
   env_double("TOPOTRACK_TEST_FINE_MORE_TOLERANCE", fine.more_rounds_tolerance);
+  env_double("TOPOTRACK_TEST_FINE_NORMAL_ANGLE", fine.max_normal_angle_deg);
+  if (const char* e = std::getenv("TOPOTRACK_TEST_FINE_NORMAL_DISPLACEMENT")) fine.normal_displacement = std::atoi(e) != 0;
   const FineReport fr = align_fine(mesh, target, fine);
   f.aligned = test::alignment_error(mesh, pair.truth, target, pair.diagonal);
   if (stages) {
