@@ -2,7 +2,10 @@
 
 #include <gtest/gtest.h>
 
+#include <tbb/task_arena.h>
+
 #include <cmath>
+#include <cstring>
 
 #include "kernels/mesh/mesh_convert.hpp"
 #include "tests/support/test_meshes.hpp"
@@ -33,6 +36,33 @@ TEST(MeshQueries, GeometryOfSphere) {
   EXPECT_GT(q.min_dihedral_deg, 150);
   EXPECT_EQ(q.below_2deg, 0u);
   EXPECT_NEAR(q.edge_length.mean, mean_edge_length(m), 1e-12);
+}
+
+// The parallel sum (per face, then per vertex in face order) is bit for bit one loop over the faces, on
+// any thread count: the reference below is that loop.
+TEST(MeshQueries, VertexNormalsAreTheSerialSumOnAnyThreadCount) {
+  test::Soup soup = test::merge(test::icosphere(5), test::torus(64, 32, 1.0, 0.35));
+  test::jitter(soup, 0.01, 7);
+  const SurfaceMesh m = soup.mesh();
+  std::vector<Vec3> expected(m.vertices_size(), Vec3::Zero());
+  for (Index f = 0; f < m.faces_size(); ++f) {
+    const auto t = m.vertices(Face(f));
+    const Vec3 fn = face_normal(m, Face(f));
+    for (int k = 0; k < 3; ++k) {
+      const Vec3 a = m.position(t[(k + 1) % 3]) - m.position(t[k]), b = m.position(t[(k + 2) % 3]) - m.position(t[k]);
+      expected[t[k].idx] += std::atan2(a.cross(b).norm(), a.dot(b)) * fn;
+    }
+  }
+  for (Vec3& n : expected)
+    if (const double len = n.norm(); len > 0) n /= len;
+  ASSERT_GT(m.faces_size(), 20000u);  // many parallel chunks
+  for (const int threads : {1, 2}) {
+    tbb::task_arena arena(threads);
+    std::vector<Vec3> n;
+    arena.execute([&] { n = vertex_normals(m); });
+    ASSERT_EQ(n.size(), expected.size());
+    EXPECT_EQ(0, std::memcmp(n.data(), expected.data(), n.size() * sizeof(Vec3))) << threads << " threads";
+  }
 }
 
 TEST(MeshQueries, DihedralOfFold) {
