@@ -13,7 +13,8 @@
 // one run. BM_Factorisation: the two Cholesky backends on the same Gauss–Newton systems (one round of the
 // direct solve each). BM_BlockCholeskySolve / BM_BlockCholeskyFactorize: the PCG preconditioner's factor
 // (4 x 4 blocks) on the deformation graph, with 1 or 2 threads, "fastest_ms" the least disturbed run;
-// BM_CholmodFactorize: CHOLMOD on the same matrices.
+// BM_CholmodFactorize: CHOLMOD on the same matrices. BM_DeformationGraph(Elephant), BM_GeodesicDistances,
+// BM_VertexNormals: the graph, the intrinsic matches' distance fields and the vertex normals alone.
 // Run: registration_bench --benchmark_format=json [--benchmark_filter=...]
 #include <benchmark/benchmark.h>
 #include <tbb/global_control.h>
@@ -292,6 +293,20 @@ BENCHMARK(BM_DeformationGraph)
     ->Unit(benchmark::kMillisecond)
     ->MeasureProcessCPUTime()
     ->Iterations(5);
+
+// The same on the elephant's source re-meshed to 98k vertices (size 3; its numbering puts an edge's ends a
+// mean 32k indices apart), full and quarter density.
+void BM_DeformationGraphElephant(benchmark::State& state) {
+  const Fixture& f = fixture(3, 15);
+  const double spacing = 4 * mean_edge_length(f.source) / std::sqrt(double(state.range(0)) / 100.0);
+  std::size_t nodes = 0;
+  for (auto _ : state) nodes = build_deformation_graph(f.source, spacing, 4).n_nodes();
+  const auto t0 = std::chrono::steady_clock::now();
+  benchmark::DoNotOptimize(sample_graph_nodes(f.source, spacing).data());
+  state.counters["sample_ms"] = bench::milliseconds_since(t0);
+  state.counters["nodes"] = double(nodes);
+}
+BENCHMARK(BM_DeformationGraphElephant)->Arg(100)->Arg(25)->ArgName("density")->Unit(benchmark::kMillisecond)->UseRealTime()->MeasureProcessCPUTime()->Iterations(5);
 
 // The intrinsic matches' distance fields (kernels/registration/intrinsic_matches.*): 32 Dijkstras over
 // the whole edge graph of the elephant's source at 47k and 98k vertices, from sources spread by index,
