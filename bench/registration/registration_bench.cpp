@@ -77,6 +77,15 @@ void alignment_counters(benchmark::State& state, const CoarseReport& c, const Fi
   state.counters["coarse_factor_s"] = c.seconds_factorisation;
   state.counters["coarse_solve_s"] = c.seconds_solve;
   state.counters["fine_s"] = fr.seconds_total;
+  // The low-density passes' own split (within coarse_prealign_s).
+  state.counters["pass_s"] = c.low_density.seconds_total;
+  state.counters["pass_graph_s"] = c.low_density.seconds_graph;
+  state.counters["pass_corr_s"] = c.low_density.seconds_correspondences;
+  state.counters["pass_assembly_s"] = c.low_density.seconds_assembly;
+  state.counters["pass_factor_s"] = c.low_density.seconds_factorisation;
+  state.counters["pass_solve_s"] = c.low_density.seconds_solve;
+  state.counters["pass_pcg_iterations"] = c.low_density.pcg_iterations;
+  state.counters["pass_nodes"] = c.low_density.nodes;
 }
 
 // Comparisons without rebuilding: TOPOTRACK_BENCH_COARSE="name=value,..." overrides CoarseParams

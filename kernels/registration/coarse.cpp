@@ -415,6 +415,20 @@ struct NodeGuide {
 CoarseReport align_coarse_impl(SurfaceMesh& mesh, const TargetSurface& target, const CoarseParams& params,
                                const NodeGuide* guide);
 
+// A low-density pass's report added to CoarseReport::low_density.
+void add_pass(CoarsePhases& to, const CoarseReport& pass) {
+  to.nodes = pass.nodes;
+  to.rounds += pass.iterations;
+  to.pcg_iterations += pass.pcg_iterations;
+  to.factorisations += pass.factorisations;
+  to.seconds_graph += pass.seconds_graph;
+  to.seconds_correspondences += pass.seconds_correspondences;
+  to.seconds_assembly += pass.seconds_assembly;
+  to.seconds_factorisation += pass.seconds_factorisation;
+  to.seconds_solve += pass.seconds_solve;
+  to.seconds_total += pass.seconds_total;
+}
+
 // The large-motion intrinsic stage (CoarseParams::intrinsic_full_graph, intrinsic_passes), after the low-density pass
 // `pass`: nodes are placed by their geodesic distances (intrinsic_matches.hpp); up to intrinsic_passes times,
 // while some of the pass's nodes are misplaced, the pass runs again with their places as their matches; then
@@ -455,7 +469,9 @@ std::optional<NodeGuide> intrinsic_stage(SurfaceMesh& mesh, const TargetSurface&
     if (im.misplaced == 0) break;
     guide.match = std::move(im.match);
     rep.seconds_intrinsic += seconds_since(t0);
-    rep.coarse_pass_iterations += align_coarse_impl(mesh, target, guided, &guide).iterations;
+    const CoarseReport pr = align_coarse_impl(mesh, target, guided, &guide);
+    rep.coarse_pass_iterations += pr.iterations;
+    add_pass(rep.low_density, pr);
     ++rep.intrinsic_passes;
     t0 = Clock::now();
   }
@@ -550,7 +566,9 @@ CoarseReport align_coarse_impl(SurfaceMesh& mesh, const TargetSurface& target, c
         };
       pass.intrinsic_passes = 0;
       pass.intrinsic_full_graph = false;
-      rep.coarse_pass_iterations = align_coarse_impl(mesh, target, pass, nullptr).iterations;
+      const CoarseReport pr = align_coarse_impl(mesh, target, pass, nullptr);
+      rep.coarse_pass_iterations = pr.iterations;
+      add_pass(rep.low_density, pr);
       if (params.intrinsic_full_graph || params.intrinsic_passes > 0)
         full_guide = intrinsic_stage(mesh, target, params, pass, rest_graph, edge, rep);
     }

@@ -212,6 +212,16 @@ struct CoarseRound {
   std::size_t correspondences = 0;
 };
 
+//! What one graph's rounds cost, by phase (CoarseReport::low_density: the low-density passes').
+struct CoarsePhases {
+  int nodes = 0;           //!< of the (last) graph
+  int rounds = 0;
+  int pcg_iterations = 0;
+  int factorisations = 0;
+  double seconds_graph = 0, seconds_correspondences = 0, seconds_assembly = 0, seconds_factorisation = 0,
+         seconds_solve = 0, seconds_total = 0;
+};
+
 struct CoarseReport {
   int iterations = 0;         //!< correspondence + Gauss–Newton rounds
   int levels = 0;             //!< alpha_reg levels visited
@@ -238,10 +248,12 @@ struct CoarseReport {
   std::size_t intrinsic_misplaced = 0;  //!< the pass's nodes found misplaced after it (intrinsic_passes > 0)
   std::size_t intrinsic_full_graph_misplaced = 0;  //!< the full graph's nodes that followed their places
   double seconds_intrinsic = 0;     //!< the intrinsic matches (within seconds_prealign)
+  //! The low-density pass and the guided passes summed (within seconds_prealign; zero when none ran).
+  CoarsePhases low_density;
   double misfit_start = 0;          //!< trimmed mean closest-point distance before anything / target diagonal
   RigidIcpReport prealign;
-  //! The misfit test, the rigid pre-alignment and the low-density pass together (the phase seconds
-  //! below are the full graph's only; seconds_total covers everything).
+  //! The misfit test, the rigid pre-alignment, the low-density passes and the intrinsic matches
+  //! together (the phase seconds below are the full graph's only; seconds_total covers everything).
   double seconds_prealign = 0;
   double seconds_graph = 0, seconds_correspondences = 0, seconds_assembly = 0, seconds_factorisation = 0,
          seconds_solve = 0, seconds_total = 0;

@@ -274,6 +274,22 @@ TEST(Alignment, RigidRotationIsRecovered) {
   const CoarseReport dp = align_coarse(with_pass.source, with_pass.target);
   EXPECT_GT(dp.coarse_pass_iterations, 1);
   EXPECT_FALSE(dp.prealigned);
+  // The pass's own split: its rounds, a sparser graph, and phases within the time before the full graph.
+  EXPECT_EQ(dp.low_density.rounds, dp.coarse_pass_iterations);
+  EXPECT_GT(dp.low_density.nodes, 0);
+  EXPECT_LT(dp.low_density.nodes, dp.nodes);
+  EXPECT_GT(dp.low_density.pcg_iterations, 0);
+  EXPECT_GT(dp.low_density.factorisations, 0);
+  const CoarsePhases& ld = dp.low_density;
+  EXPECT_GT(ld.seconds_total, 0);
+  EXPECT_LE(ld.seconds_graph + ld.seconds_correspondences + ld.seconds_assembly + ld.seconds_factorisation +
+                ld.seconds_solve,
+            ld.seconds_total);
+  EXPECT_LE(ld.seconds_total, dp.seconds_prealign);
+  // The paper's scheme alone runs no pass and reports none.
+  EXPECT_EQ(cr.low_density.rounds, 0);
+  EXPECT_EQ(cr.low_density.nodes, 0);
+  EXPECT_EQ(cr.low_density.seconds_total, 0);
   align_fine(with_pass.source, with_pass.target);
   EXPECT_LT(mean_error(with_pass.source, with_pass.truth), 0.005 * diag);
 }
