@@ -79,6 +79,7 @@ std::vector<Binding> bindings(TrackerParams& p) {
       {"coarse.backward_samples_per_node", &p.coarse_params.backward_samples_per_node, 1, 1e6},
       {"coarse.intrinsic_full_graph", &p.coarse_params.intrinsic_full_graph},
       {"coarse.intrinsic_passes", &p.coarse_params.intrinsic_passes, 0, 16},
+      {"coarse.intrinsic_pass_max_iterations_per_level", &p.coarse_params.intrinsic_pass_max_iterations_per_level, 1, 1e6},
       {"coarse.intrinsic_anchors", &p.coarse_params.intrinsic.anchors, 2, 1024},
       {"coarse.intrinsic_tolerance", &p.coarse_params.intrinsic.tolerance, 0, 1},
       {"coarse.intrinsic_misplaced_spacings", &p.coarse_params.intrinsic.misplaced_spacings, 0, 1e6},

@@ -8,6 +8,7 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <optional>
 
 #include "kernels/mesh/edge_graph.hpp"
@@ -410,10 +411,14 @@ struct NodeGuide {
   std::vector<Vertex> nodes;
   double spacing = 0;
   std::vector<Correspondence> match;
+  //! When set (the guided passes), the graph over `nodes` to use instead of building one: its skinning
+  //! weights and edges are kept, the mesh as it is now becomes its rest state.
+  std::shared_ptr<const DeformationGraph> graph;
 };
 
+// `built`, when given, receives the graph the rounds ran on.
 CoarseReport align_coarse_impl(SurfaceMesh& mesh, const TargetSurface& target, const CoarseParams& params,
-                               const NodeGuide* guide);
+                               const NodeGuide* guide, std::shared_ptr<const DeformationGraph>* built = nullptr);
 
 // A low-density pass's report added to CoarseReport::low_density.
 void add_pass(CoarsePhases& to, const CoarseReport& pass) {
@@ -439,12 +444,12 @@ void add_pass(CoarsePhases& to, const CoarseReport& pass) {
 constexpr double kGuidedPassAlphaRegStart = 10;
 
 std::optional<NodeGuide> intrinsic_stage(SurfaceMesh& mesh, const TargetSurface& target, const CoarseParams& params,
-                                         const CoarseParams& pass, const EdgeGraph& rest, double edge,
-                                         CoarseReport& rep) {
+                                         const CoarseParams& pass, std::shared_ptr<const DeformationGraph> pass_graph,
+                                         const EdgeGraph& rest, double edge, CoarseReport& rep) {
   auto t0 = Clock::now();
   const EdgeGraph target_graph = edge_graph(target.positions(), target.triangles());
-  // The pass's nodes, sampled once on the rest state (the same nodes in every guided pass); anchors among
-  // them; every length of the matching in units of their spacing.
+  // Nodes at the pass's spacing sampled on the rest state, the anchors' candidates; every length of the
+  // matching in units of their spacing.
   NodeGuide guide;
   guide.spacing = pass.node_spacing_factor * mean_edge_length(mesh) / std::sqrt(pass.graph_density);
   const std::vector<Index> nodes = poisson_disk_samples(rest, guide.spacing);
@@ -463,8 +468,19 @@ std::optional<NodeGuide> intrinsic_stage(SurfaceMesh& mesh, const TargetSurface&
   };
   CoarseParams guided = pass;
   guided.alpha_reg_start = std::min(pass.alpha_reg_start, kGuidedPassAlphaRegStart);
+  guided.max_iterations_per_level = params.intrinsic_pass_max_iterations_per_level;
+  // The guided passes run on the first pass's graph (its nodes, weights and edges; the mesh as it is now its
+  // rest state): no graph to build again.
+  std::vector<Index> pass_nodes = nodes;
+  if (pass_graph) {
+    guide.graph = pass_graph;
+    guide.nodes = pass_graph->node_vertex;
+    pass_nodes.resize(guide.nodes.size());
+    for (std::size_t j = 0; j < guide.nodes.size(); ++j) pass_nodes[j] = guide.nodes[j].idx;
+  }
+  std::vector<Vec3> pass_x(pass_nodes.size());
   for (int k = 0; k < params.intrinsic_passes; ++k) {
-    IntrinsicMatches im = matches(nodes, x);
+    IntrinsicMatches im = matches(pass_nodes, pass_x);
     if (k == 0) rep.intrinsic_misplaced = im.misplaced;
     if (im.misplaced == 0) break;
     guide.match = std::move(im.match);
@@ -503,7 +519,7 @@ CoarseReport align_coarse(SurfaceMesh& mesh, const TargetSurface& target, const 
 namespace {
 
 CoarseReport align_coarse_impl(SurfaceMesh& mesh, const TargetSurface& target, const CoarseParams& params,
-                               const NodeGuide* guide) {
+                               const NodeGuide* guide, std::shared_ptr<const DeformationGraph>* built) {
   const auto t_total = Clock::now();
   CoarseReport rep;
   if (!(params.node_spacing_factor > 0) || !(params.graph_density > 0) || params.graph_density > 1 ||
@@ -514,7 +530,7 @@ CoarseReport align_coarse_impl(SurfaceMesh& mesh, const TargetSurface& target, c
       !(params.stall_ratio >= 0) || !(params.prealign_misfit >= 0) || params.closest_point_levels < 0 ||
       !(params.coarse_pass_misfit >= 0) || !(params.coarse_pass_density > 0) || params.coarse_pass_density > 1 ||
       !(params.coarse_pass_alpha_reg_min > 0) || !(params.backward_weight >= 0) || !(params.backward_misfit >= 0) ||
-      !(params.backward_all_misfit >= 0) || params.intrinsic_passes < 0 ||
+      !(params.backward_all_misfit >= 0) || params.intrinsic_passes < 0 || params.intrinsic_pass_max_iterations_per_level < 1 ||
       params.backward_samples_per_node < 1)
     TT_THROW(InvalidInput, "align_coarse: invalid parameters");
   if (params.prealign_misfit > 0 || params.coarse_pass_misfit > 0) validate(params.prealign);
@@ -566,11 +582,12 @@ CoarseReport align_coarse_impl(SurfaceMesh& mesh, const TargetSurface& target, c
         };
       pass.intrinsic_passes = 0;
       pass.intrinsic_full_graph = false;
-      const CoarseReport pr = align_coarse_impl(mesh, target, pass, nullptr);
+      std::shared_ptr<const DeformationGraph> pass_graph;
+      const CoarseReport pr = align_coarse_impl(mesh, target, pass, nullptr, params.intrinsic_passes > 0 ? &pass_graph : nullptr);
       rep.coarse_pass_iterations = pr.iterations;
       add_pass(rep.low_density, pr);
       if (params.intrinsic_full_graph || params.intrinsic_passes > 0)
-        full_guide = intrinsic_stage(mesh, target, params, pass, rest_graph, edge, rep);
+        full_guide = intrinsic_stage(mesh, target, params, pass, std::move(pass_graph), rest_graph, edge, rep);
     }
   }
   rep.backward = backward;
@@ -629,7 +646,12 @@ CoarseReport align_coarse_impl(SurfaceMesh& mesh, const TargetSurface& target, c
       return rep;
     }
   }
-  const DeformationGraph graph = build_deformation_graph(mesh, std::move(nodes), spacing, params.k);
+  const DeformationGraph graph = [&] {
+    if (!guide || !guide->graph) return build_deformation_graph(mesh, std::move(nodes), spacing, params.k);
+    DeformationGraph g = *guide->graph;
+    for (std::size_t j = 0; j < g.n_nodes(); ++j) g.node_position[j] = mesh.position(g.node_vertex[j]);
+    return g;
+  }();
   const std::vector<Vec3> rest = mesh.positions();
   const Problem problem{graph, rest, mesh};
   const std::size_t nn = graph.n_nodes();
@@ -816,6 +838,7 @@ CoarseReport align_coarse_impl(SurfaceMesh& mesh, const TargetSurface& target, c
       if (!mesh.is_deleted(Vertex(Index(v)))) pos[v] = skin(problem, state, Index(v));
   });
   rep.seconds_assembly += seconds_since(t0);
+  if (built) *built = std::make_shared<const DeformationGraph>(graph);
   rep.seconds_total = seconds_since(t_total);
   return rep;
 }

@@ -187,9 +187,15 @@ struct CoarseParams {
   //! `intrinsic_full_graph` the full graph's misplaced nodes do so in every round; `intrinsic_passes` first
   //! runs the low-density pass again, up to that many times while any of its nodes are misplaced, with
   //! theirs (more accurate, and dearer). Off by default and in the tracker; `topotrack align` sets
-  //! intrinsic_full_graph (kLargeMotionIntrinsic). Measured in docs/results.md (2026-12-01).
+  //! intrinsic_full_graph and one guided pass (use_large_motion_alignment). Measured in docs/results.md
+  //! (2026-12-01, 2026-12-02).
   bool intrinsic_full_graph = false;
   int intrinsic_passes = 0;
+  //! Cap on rounds per alpha_reg level of a guided pass (from alpha_reg 10; our addition). A guided pass runs on
+  //! the first pass's graph, the mesh as the first pass left it its rest state. Measured (elephant frame 1 -> 16,
+  //! one guided pass, median over five re-samplings of the target): 1.11 % of the diagonal (1.06-1.14) with 3,
+  //! 1.07 % (1.06-1.59) with 8 at about twice the pass's rounds; two guided passes with 3: 1.11 %.
+  int intrinsic_pass_max_iterations_per_level = 3;
   IntrinsicParams intrinsic;
   //! Diagnostics: when set, called after the pre-alignment and after every alpha_reg level (then
   //! costs one skinning of the mesh per level); the result does not depend on it.
@@ -199,6 +205,10 @@ struct CoarseParams {
   std::function<void(const CoarseMatchRound&, std::vector<Correspondence>&)> match_override;
 };
 
+
+//! Guided low-density passes `topotrack align` runs (use_large_motion_alignment): the elephant frame 1 -> 16,
+//! median over five re-samplings of the target, 1.44 % of the diagonal without, 1.11 % with one (docs/results.md).
+inline constexpr int kLargeMotionIntrinsicPasses = 1;
 
 //! One correspondence + Gauss–Newton round.
 struct CoarseRound {

@@ -1,7 +1,8 @@
 #pragma once
 //! What `topotrack align` adds to the library's defaults for a pair far apart (our additions; the tracker,
 //! between consecutive frames, keeps the defaults): the full graph's misplaced nodes follow their intrinsic
-//! places (CoarseParams::intrinsic_full_graph) and the fine stage takes further rounds
+//! places (CoarseParams::intrinsic_full_graph) after one low-density pass guided by the pass's own misplaced
+//! nodes (kLargeMotionIntrinsicPasses), and the fine stage takes further rounds
 //! (kLargeMotionFineRounds). The rigid pre-alignment, the low-density pass and the backward matches are
 //! library defaults already, gated by the measured misfit. One place for the tool, the tests and the bench.
 #include "kernels/registration/coarse.hpp"
@@ -11,6 +12,7 @@ namespace topotrack {
 
 inline void use_large_motion_alignment(CoarseParams& coarse, FineParams& fine) {
   coarse.intrinsic_full_graph = true;
+  coarse.intrinsic_passes = kLargeMotionIntrinsicPasses;
   fine.max_rounds = kLargeMotionFineRounds;
 }
 

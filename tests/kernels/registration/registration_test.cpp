@@ -10,6 +10,7 @@
 
 #include "kernels/mesh/mesh_queries.hpp"
 #include "kernels/registration/coarse.hpp"
+#include "kernels/registration/large_motion.hpp"
 #include "kernels/registration/correspondences.hpp"
 #include "kernels/registration/deformation_graph.hpp"
 #include "kernels/registration/fine.hpp"
@@ -574,6 +575,9 @@ TEST(Alignment, BadParametersThrow) {
   p.step_tolerance = -1;
   EXPECT_THROW(align_coarse(c.source, c.target, p), InvalidInput);
   p = CoarseParams{};
+  p.intrinsic_pass_max_iterations_per_level = 0;
+  EXPECT_THROW(align_coarse(c.source, c.target, p), InvalidInput);
+  p = CoarseParams{};
   p.fit_tolerance = std::nan("");
   EXPECT_THROW(align_coarse(c.source, c.target, p), InvalidInput);
   p = CoarseParams{};
@@ -645,6 +649,19 @@ TEST(Alignment, OneAndTwoThreadsGiveIdenticalResults) {
       Case d = make_case([&](const Vec3& p) { return Vec3(R2 * p + Vec3(0.6, -0.3, 0.2)); });
       EXPECT_TRUE(align_coarse(d.source, d.target).prealigned);
       out.insert(out.end(), d.source.positions().begin(), d.source.positions().end());
+      // `align`'s configuration, every node off its intrinsic place counted misplaced: a guided pass runs on
+      // the first pass's graph.
+      Case e = make_case([&](const Vec3& p) { return Vec3(R2 * p + Vec3(0.6, -0.3, 0.2)); });
+      CoarseParams q;
+      FineParams f;
+      use_large_motion_alignment(q, f);
+      q.intrinsic.misplaced_spacings = 0;
+      q.check_fit_first = false;  // the first pass runs its rounds (else it may find itself fitted, with no graph)
+      const CoarseReport er = align_coarse(e.source, e.target, q);
+      EXPECT_EQ(er.intrinsic_passes, 1);
+      EXPECT_EQ(er.low_density.rounds, er.coarse_pass_iterations);
+      EXPECT_GT(er.low_density.factorisations, 1);  // the first pass's and the guided pass's
+      out.insert(out.end(), e.source.positions().begin(), e.source.positions().end());
     });
     return out;
   };
