@@ -439,8 +439,9 @@ void add_pass(CoarsePhases& to, const CoarseReport& pass) {
 // while some of the pass's nodes are misplaced, the pass runs again with their places as their matches; then
 // the full graph's misplaced nodes get theirs (the guide returned, for the full graph's rounds).
 // The guided passes start at this alpha_reg: the first pass has fitted all but the misplaced parts. Measured
-// (elephant frame 1 -> 16, two guided passes, median over five re-samplings): 1.01 % of the diagonal from 10,
-// 1.08 % from 1000 (the first pass's start), at two thirds of the time per pass.
+// (elephant frame 1 -> 16, two guided passes, median over five re-samplings; 2026-12-01, each guided pass then on
+// its own graph with 8 rounds per level): 1.01 % of the diagonal from 10, 1.08 % from 1000 (the first pass's
+// start), at two thirds of the time per pass.
 constexpr double kGuidedPassAlphaRegStart = 10;
 
 std::optional<NodeGuide> intrinsic_stage(SurfaceMesh& mesh, const TargetSurface& target, const CoarseParams& params,
