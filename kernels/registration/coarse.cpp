@@ -461,11 +461,12 @@ std::optional<NodeGuide> intrinsic_stage(SurfaceMesh& mesh, const TargetSurface&
   }
   const IntrinsicAnchors anchors = intrinsic_anchors(rest, nodes, x, params.intrinsic.anchors);
   std::vector<Vec3> ax(anchors.anchor.size());
+  IntrinsicTargetCache target_cache;  // the target's fields and candidates, shared by the matchings below
   // The intrinsic matches of `at` (source vertices) for the mesh as it is now.
   const auto matches = [&](const std::vector<Index>& at, std::vector<Vec3>& at_x) {
     for (std::size_t j = 0; j < at.size(); ++j) at_x[j] = mesh.position(Vertex(at[j]));
     for (std::size_t a = 0; a < ax.size(); ++a) ax[a] = mesh.position(Vertex(anchors.anchor[a]));
-    return intrinsic_matches(anchors, ax, at, at_x, target, target_graph, guide.spacing, params.intrinsic);
+    return intrinsic_matches(anchors, ax, at, at_x, target, target_graph, guide.spacing, params.intrinsic, &target_cache);
   };
   CoarseParams guided = pass;
   guided.alpha_reg_start = std::min(pass.alpha_reg_start, kGuidedPassAlphaRegStart);

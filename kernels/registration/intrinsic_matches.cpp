@@ -57,7 +57,7 @@ IntrinsicAnchors intrinsic_anchors(const EdgeGraph& source, std::span<const Inde
 IntrinsicMatches intrinsic_matches(const IntrinsicAnchors& anchors, std::span<const Vec3> anchor_x,
                                    std::span<const Index> nodes, std::span<const Vec3> node_x,
                                    const TargetSurface& target, const EdgeGraph& target_graph, double spacing,
-                                   const IntrinsicParams& params) {
+                                   const IntrinsicParams& params, IntrinsicTargetCache* cache) {
   if (nodes.size() != node_x.size() || anchors.anchor.size() != anchor_x.size())
     TT_THROW(InvalidInput, "intrinsic_matches: positions do not match the nodes or the anchors");
   if (target_graph.n_vertices() != target.n_vertices())
@@ -77,7 +77,24 @@ IntrinsicMatches intrinsic_matches(const IntrinsicAnchors& anchors, std::span<co
   // The anchors' current matches on the target, and the target's distances from them: dt[a][t].
   std::vector<Index> m(A);
   for (std::size_t a = 0; a < A; ++a) m[a] = nearest_target_vertex(target, anchor_x[a]);
-  const std::vector<std::vector<float>> dt = geodesic_distances(target_graph, m);
+  IntrinsicTargetCache local;
+  IntrinsicTargetCache& tc = cache ? *cache : local;
+  auto field_of = [&](Index t) {
+    return std::size_t(std::find(tc.source.begin(), tc.source.end(), t) - tc.source.begin());
+  };
+  std::vector<Index> missing;
+  for (std::size_t a = 0; a < A; ++a)
+    if (field_of(m[a]) == tc.source.size() && std::find(missing.begin(), missing.end(), m[a]) == missing.end())
+      missing.push_back(m[a]);
+  if (!missing.empty()) {
+    std::vector<std::vector<float>> fields = geodesic_distances(target_graph, missing);
+    for (std::size_t k = 0; k < missing.size(); ++k) {
+      tc.source.push_back(missing[k]);
+      tc.distance.push_back(std::move(fields[k]));
+    }
+  }
+  std::vector<std::span<const float>> dt(A);
+  for (std::size_t a = 0; a < A; ++a) dt[a] = tc.distance[field_of(m[a])];
 
   // Consistency of the anchors' matches: the worst anchor dropped until each agrees with most others.
   std::vector<char> kept(A, 1);
@@ -131,7 +148,11 @@ IntrinsicMatches intrinsic_matches(const IntrinsicAnchors& anchors, std::span<co
 
   // Each node placed where its distances to its nearest kept anchors are best reproduced: the best
   // of the target's Poisson-disk samples, then steepest descent over target vertices.
-  const std::vector<Index> candidates = poisson_disk_samples(target_graph, spacing);
+  if (tc.candidates.empty() || tc.candidate_spacing != spacing) {
+    tc.candidates = poisson_disk_samples(target_graph, spacing);
+    tc.candidate_spacing = spacing;
+  }
+  const std::vector<Index>& candidates = tc.candidates;
   const auto& TP = target.positions();
   std::vector<char> misplaced(nn, 0);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nn, 16), [&](const auto& r) {

@@ -57,12 +57,23 @@ struct IntrinsicMatches {
   double scale = 1;  //!< target / source distance, median over pairs of kept anchors
 };
 
+//! What intrinsic_matches computes on the target and can reuse in a later call on the same target graph: the
+//! distance fields from the anchors' matches (a field depends on its source vertex alone) and the candidate
+//! places at a spacing. The results are the same with or without it.
+struct IntrinsicTargetCache {
+  std::vector<Index> source;                  //!< target vertex of each field
+  std::vector<std::vector<float>> distance;   //!< [f][t]
+  double candidate_spacing = 0;
+  std::vector<Index> candidates;
+};
+
 //! `nodes`: source vertices, `node_x`: where they are now (and `anchor_x`: where the anchors are now);
 //! `target_graph`: edge_graph(target.positions(), target.triangles()); `spacing`: the nodes' spacing (a
-//! length). Deterministic for any thread count. \throw InvalidInput on mismatched sizes or bad parameters.
+//! length); `cache` (optional): reused and extended (only for one target graph).
+//! Deterministic for any thread count. \throw InvalidInput on mismatched sizes or bad parameters.
 IntrinsicMatches intrinsic_matches(const IntrinsicAnchors& anchors, std::span<const Vec3> anchor_x,
                                    std::span<const Index> nodes, std::span<const Vec3> node_x,
                                    const TargetSurface& target, const EdgeGraph& target_graph, double spacing,
-                                   const IntrinsicParams& params = {});
+                                   const IntrinsicParams& params = {}, IntrinsicTargetCache* cache = nullptr);
 
 }  // namespace topotrack

@@ -118,6 +118,26 @@ TEST(IntrinsicMatches, FindAndPlaceACapLaidOnAnotherPart) {
   const IntrinsicMatches none = intrinsic_matches(anchors, anchor_truth, nodes, truth, target, target_graph, spacing);
   EXPECT_EQ(none.misplaced, 0u);
   EXPECT_EQ(none.kept, none.anchors);
+
+  // A cache shared by both matchings (the second reuses the fields of the anchors whose matches did not move)
+  // changes nothing.
+  IntrinsicTargetCache cache;
+  const auto same = [](const IntrinsicMatches& a, const IntrinsicMatches& b) {
+    ASSERT_EQ(a.match.size(), b.match.size());
+    EXPECT_EQ(a.kept, b.kept);
+    EXPECT_EQ(a.misplaced, b.misplaced);
+    EXPECT_EQ(a.scale, b.scale);
+    for (std::size_t j = 0; j < a.match.size(); ++j) {
+      EXPECT_EQ(a.match[j].status, b.match[j].status);
+      EXPECT_EQ(a.match[j].point, b.match[j].point);
+    }
+  };
+  same(intrinsic_matches(anchors, anchor_now, nodes, now, target, target_graph, spacing, {}, &cache), im);
+  const std::size_t fields = cache.source.size();
+  EXPECT_EQ(fields, anchors.anchor.size());
+  same(intrinsic_matches(anchors, anchor_truth, nodes, truth, target, target_graph, spacing, {}, &cache), none);
+  EXPECT_GT(cache.source.size(), fields);                        // the cap's anchors moved: new fields
+  EXPECT_LT(cache.source.size(), 2 * anchors.anchor.size());     // the others' were reused
 }
 
 // A textbook Dijkstra in float arithmetic (binary heap of (distance, vertex), the mesh's own numbering):
