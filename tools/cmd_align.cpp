@@ -17,6 +17,7 @@
 #include "kernels/registration/projection.hpp"
 #include "tools/cli_common.hpp"
 #include "tools/commands.hpp"
+#include "tools/heap.hpp"
 
 namespace topotrack::cli {
 namespace {
@@ -141,6 +142,7 @@ nlohmann::json run_fine(SurfaceMesh& mesh, const TargetSurface& target, const Fi
 }
 
 void run_align(const AlignOptions& opt) {
+  keep_freed_memory();
   if (int(opt.coarse_only) + int(opt.fine_only) + int(opt.projection_only) > 1)
     TT_THROW(UsageError, "align: --coarse-only, --fine-only and --projection-only exclude each other");
   const TrackerParams params = align_params(opt);

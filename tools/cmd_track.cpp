@@ -1,7 +1,6 @@
 // topotrack track INPUT -o OUT: Algorithm 1 over a sequence, one frame at a time, with per-stage timings,
 // a progress display and --resume after a crash. Pipelined (issue #6): frame n+1 is read and prepared
 // (Tracker::prepare: its scene and φ_S) and frame n-1 written while frame n is tracked, on the one TBB pool.
-#include <malloc.h>
 #include <sys/resource.h>
 #include <tbb/global_control.h>
 #include <tbb/task_arena.h>
@@ -26,6 +25,7 @@
 #include "kernels/raycast/embree_scene.hpp"
 #include "tools/cli_common.hpp"
 #include "tools/commands.hpp"
+#include "tools/heap.hpp"
 #include "tools/progress.hpp"
 
 namespace topotrack::cli {
@@ -196,17 +196,6 @@ void write_output(FrameOutput& o, OutputSink& sink) {
                 o.events.size(), r.seconds.total + o.io_seconds);
   o.summary = summary;
   o.json = fj.dump();
-}
-
-//! glibc raises its mmap threshold (up to 32 MiB) each time a large block is freed, so that later blocks of a
-//! frame's grids, cuts and event lists come from the heap, whose freed pages it keeps: over a run the resident
-//! memory grows well past what is live. A fixed threshold (which also stops the raising) gives blocks from
-//! 4 MiB on back at once. Resurfaced pcow, capture profile, 40 frames: peak 1 107 -> 974 MB, no slower, output
-//! byte-identical (128 KiB saved no more and cost 8 % of the time; docs/results.md, 2026-11-25 evening).
-void keep_large_blocks_unpooled() {
-#ifdef __GLIBC__
-  mallopt(M_MMAP_THRESHOLD, 4 << 20);
-#endif
 }
 
 void run_track(TrackOptions opt) {

@@ -15,6 +15,8 @@
 // (4 x 4 blocks) on the deformation graph, with 1 or 2 threads, "fastest_ms" the least disturbed run;
 // BM_CholmodFactorize: CHOLMOD on the same matrices. BM_DeformationGraph(Elephant), BM_GeodesicDistances,
 // BM_VertexNormals: the graph, the intrinsic matches' distance fields and the vertex normals alone.
+// BM_AlignCoarseFine and BM_TrackerStep set malloc's policy as `topotrack align` and `track` do
+// (tools/heap.hpp); it stays for the benchmarks that run after them in the same process.
 // Run: registration_bench --benchmark_format=json [--benchmark_filter=...]
 #include <benchmark/benchmark.h>
 #include <tbb/global_control.h>
@@ -29,6 +31,7 @@
 #include <tuple>
 
 #include "bench/bench_support.hpp"
+#include "tools/heap.hpp"
 #include "kernels/gen/synthetic.hpp"
 #include "kernels/mesh/edge_graph.hpp"
 #include "kernels/mesh/mesh_convert.hpp"
@@ -124,6 +127,7 @@ void override_params(CoarseParams& p) {
 }
 
 void BM_AlignCoarseFine(benchmark::State& state) {
+  cli::keep_freed_memory();  // as topotrack align (tools/heap.hpp)
   const Fixture& f = fixture(int(state.range(0)), int(state.range(2)));
   CoarseParams params;
   params.graph_density = double(state.range(1)) / 100.0;
@@ -223,6 +227,7 @@ double truth_error(const SurfaceMesh& mesh, const BlobsStep& f) {
 }
 
 void BM_TrackerStep(benchmark::State& state) {
+  cli::keep_large_blocks_unpooled();  // as topotrack track (tools/heap.hpp)
   const BlobsStep& f = blobs_step(int(state.range(0)));
   CoarseParams params;
   params.graph_density = double(state.range(2)) / 100.0;

@@ -26,7 +26,7 @@ struct Figures {
 // Environment knobs for comparisons: TOPOTRACK_TEST_CHOLESKY=eigen, TOPOTRACK_TEST_DIRECT=1,
 // TOPOTRACK_TEST_RETRACT=0|1 (retract_rotations), TOPOTRACK_TEST_CHECK_FIT=0|1 (check_fit_first), and
 // TOPOTRACK_TEST_<NAME>=value for the CoarseParams below (MAX_PCG: max_pcg_iterations, NODE_SPACING:
-// node_spacing_factor), TOPOTRACK_TEST_HISTORY=1
+// node_spacing_factor, ALPHA_POINT / ALPHA_PLANE: alpha_point / alpha_plane), TOPOTRACK_TEST_HISTORY=1
 // (per-round figures), TOPOTRACK_TEST_RIGID_TRUTH=1 (the error of the best rigid motion: pcow 9.5%, elephant 6.0%),
 // TOPOTRACK_TEST_INTRINSIC=0|1, TOPOTRACK_TEST_INTRINSIC_PASSES=n (CoarseParams::intrinsic_full_graph,
 // intrinsic_passes), TOPOTRACK_TEST_INTRINSIC_ANCHORS=n, TOPOTRACK_TEST_INTRINSIC_MISPLACED=x, TOPOTRACK_TEST_FINE_ROUNDS=n, TOPOTRACK_TEST_FINE_MAX_ROUNDS=n, TOPOTRACK_TEST_FINE_MORE_RESIDUAL=x, TOPOTRACK_TEST_FINE_NORMAL_ANGLE=deg,
@@ -83,6 +83,8 @@ Figures run_pair(const std::string& name, int frame, int gap, double edge_factor
   env_double("TOPOTRACK_TEST_STALL_RATIO", params.stall_ratio);
   env_double("TOPOTRACK_TEST_CONVERGENCE_TOLERANCE", params.convergence_tolerance);
   env_double("TOPOTRACK_TEST_ALPHA_REG_START", params.alpha_reg_start);
+  env_double("TOPOTRACK_TEST_ALPHA_POINT", params.alpha_point);
+  env_double("TOPOTRACK_TEST_ALPHA_PLANE", params.alpha_plane);
   env_double("TOPOTRACK_TEST_ALPHA_REG_MIN", params.alpha_reg_min);
   env_double("TOPOTRACK_TEST_MAX_CLOSEST_RATIO", params.max_closest_ratio);
   env_double("TOPOTRACK_TEST_MAX_NORMAL_ANGLE", params.max_normal_angle_deg);
