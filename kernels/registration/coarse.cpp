@@ -530,6 +530,7 @@ CoarseReport align_coarse_impl(SurfaceMesh& mesh, const TargetSurface& target, c
       params.max_iterations_per_level < 1 || params.max_iterations_per_level_after_pass < 1 ||
       !(params.damping > 0) || !(params.step_tolerance >= 0) || !(params.fit_tolerance >= 0) ||
       !(params.stall_ratio >= 0) || !(params.prealign_misfit >= 0) || params.closest_point_levels < 0 ||
+      !(params.alpha_reg_start_after_pass >= 0) || !(params.check_fit_first_tolerance >= 0) ||
       !(params.coarse_pass_misfit >= 0) || !(params.coarse_pass_density > 0) || params.coarse_pass_density > 1 ||
       !(params.coarse_pass_alpha_reg_min > 0) || !(params.backward_weight >= 0) || !(params.backward_misfit >= 0) ||
       !(params.backward_all_misfit >= 0) || params.intrinsic_passes < 0 || params.intrinsic_pass_max_iterations_per_level < 1 ||
@@ -613,7 +614,8 @@ CoarseReport align_coarse_impl(SurfaceMesh& mesh, const TargetSurface& target, c
   const double spacing = guide ? guide->spacing : params.node_spacing_factor * edge / std::sqrt(params.graph_density);
   std::vector<Vertex> nodes = guide ? guide->nodes : sample_graph_nodes(mesh, spacing);
   rep.node_spacing = spacing;
-  if (params.check_fit_first && params.fit_tolerance > 0 && !guide) {
+  const double fitted_first = params.check_fit_first_tolerance > 0 ? params.check_fit_first_tolerance : params.fit_tolerance;
+  if (params.check_fit_first && fitted_first > 0 && !guide) {
     // Converged before the first step: the nodes already lie on their correspondences (the same
     // measure and threshold that end the schedule after a round), so the graph is not completed.
     const auto tc = Clock::now();
@@ -633,7 +635,7 @@ CoarseReport align_coarse_impl(SurfaceMesh& mesh, const TargetSurface& target, c
       if (corr[j].valid()) fit_distance += (x[j] - corr[j].point).norm();
     fit_distance /= double(std::max<std::size_t>(1, counts.ok));
     rep.seconds_correspondences += seconds_since(tc);
-    if (counts.ok > 0 && fit_distance <= params.fit_tolerance * edge) {
+    if (counts.ok > 0 && fit_distance <= fitted_first * edge) {
       rep.fitted_at_start = true;
       rep.levels = 0;
       rep.nodes = int(n);
@@ -678,7 +680,9 @@ CoarseReport align_coarse_impl(SurfaceMesh& mesh, const TargetSurface& target, c
   const TargetSamples samples =
       backward ? sample_target(target, std::size_t(params.backward_samples_per_node) * nn) : TargetSamples{};
   Eigen::VectorXd grad;
-  double alpha_reg = params.alpha_reg_start;
+  double alpha_reg = rep.coarse_pass_iterations > 0 && params.alpha_reg_start_after_pass > 0
+                         ? params.alpha_reg_start_after_pass
+                         : params.alpha_reg_start;
   int level_iterations = 0;
   const int per_level =
       rep.coarse_pass_iterations > 0 ? params.max_iterations_per_level_after_pass : params.max_iterations_per_level;

@@ -101,6 +101,11 @@ struct CoarseParams {
   //! full-density graph after the low-density pass between consecutive frames, whose one round at
   //! alpha_reg 1000 then moved the nodes by 0.002 mean edge lengths (blobs at 100k vertices).
   bool check_fit_first = true;
+  //! The mean distance, in mean edge lengths, below which check_fit_first finds the nodes fitted (0: fit_tolerance).
+  //! `topotrack align` ends its schedule at a lower fit_tolerance (kLargeMotionFitTolerance) but keeps 0.05 here:
+  //! with 0.02 samba's consecutive frames 1 -> 2 took 25 rounds instead of none, for 0.0562 % ground-truth error
+  //! instead of 0.0549 %.
+  double check_fit_first_tolerance = 0;
   //! Node density relative to the paper's (1, 0.5, 0.25: the paper's fast preview); spacing / sqrt(density).
   double graph_density = 1;
   //! Levenberg–Marquardt damping of the step (relative units): keeps the system positive definite
@@ -160,6 +165,11 @@ struct CoarseParams {
   //! median 1.20 -> 1.36 s/frame), 2.013% -> 1.901% (profiles/capture.json, which sets 8). Where the full
   //! graph finds the nodes fitted (blobs) or the pass does not run (samba) nothing changes.
   int max_iterations_per_level_after_pass = 3;
+  //! The full graph's first alpha_reg after the low-density pass ran (our addition; 0: alpha_reg_start, the
+  //! paper's 1000). The pass has fitted the coarse motion down to its alpha_reg of 0.1, so the full graph's levels
+  //! at 1000 and 100 (3 rounds each) moved little: the elephant frame 1 -> 16 2.21 -> 2.19 % of the diagonal
+  //! over both. `topotrack align` starts at kLargeMotionAlphaRegStartAfterPass; the tracker keeps 1000.
+  double alpha_reg_start_after_pass = 0;
   //! Large motion (our addition, the target -> source half of a symmetric fit): when the misfit (see
   //! prealign_misfit) exceeds `backward_misfit`, each round also matches the target to the nodes
   //! (find_backward_correspondences, about `backward_samples_per_node` target samples per node) and
@@ -209,6 +219,18 @@ struct CoarseParams {
 //! Guided low-density passes `topotrack align` runs (use_large_motion_alignment): the elephant frame 1 -> 16,
 //! median over five re-samplings of the target, 1.44 % of the diagonal without, 1.11 % with one (docs/results.md).
 inline constexpr int kLargeMotionIntrinsicPasses = 1;
+
+//! What else `topotrack align` sets (use_large_motion_alignment): the full graph after the low-density pass
+//! from alpha_reg 10 (CoarseParams::alpha_reg_start_after_pass), down to 0.01 (alpha_reg_min) unless the nodes
+//! lie within 0.02 mean edge lengths of their matches (fit_tolerance; samba stopped at 0.05; a pair found fitted
+//! before the first round still is at 0.05: kLargeMotionCheckFitFirstTolerance). Measured together
+//! (frame 1 -> 16, median over five re-samplings of the target, % of the diagonal; docs/results.md 2026-12-02):
+//! samba 0.152 -> 0.138, pcow 3.49 -> 3.46, elephant 1.11 -> 1.08, and bench/registration gap 15 (medians of four
+//! alternating runs) 47k 2.08 -> 1.73 s, 98k 4.13 -> 3.43 s: two levels fewer on the full graph, one more lower.
+inline constexpr double kLargeMotionAlphaRegStartAfterPass = 10;
+inline constexpr double kLargeMotionAlphaRegMin = 0.01;
+inline constexpr double kLargeMotionFitTolerance = 0.02;
+inline constexpr double kLargeMotionCheckFitFirstTolerance = 0.05;  // the library's fit_tolerance (see there)
 
 //! One correspondence + Gauss–Newton round.
 struct CoarseRound {

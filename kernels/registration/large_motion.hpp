@@ -2,8 +2,10 @@
 //! What `topotrack align` adds to the library's defaults for a pair far apart (our additions; the tracker,
 //! between consecutive frames, keeps the defaults): the full graph's misplaced nodes follow their intrinsic
 //! places (CoarseParams::intrinsic_full_graph) after one low-density pass guided by the pass's own misplaced
-//! nodes (kLargeMotionIntrinsicPasses), and the fine stage takes further rounds
-//! (kLargeMotionFineRounds). The rigid pre-alignment, the low-density pass and the backward matches are
+//! nodes (kLargeMotionIntrinsicPasses), the full graph's levels run from alpha_reg 10 down to 0.01
+//! (kLargeMotionAlphaRegStartAfterPass, kLargeMotionAlphaRegMin, kLargeMotionFitTolerance and
+//! kLargeMotionCheckFitFirstTolerance), and the fine stage takes
+//! further rounds (kLargeMotionFineRounds). The rigid pre-alignment, the low-density pass and the backward matches are
 //! library defaults already, gated by the measured misfit. One place for the tool, the tests and the bench.
 #include "kernels/registration/coarse.hpp"
 #include "kernels/registration/fine.hpp"
@@ -13,6 +15,10 @@ namespace topotrack {
 inline void use_large_motion_alignment(CoarseParams& coarse, FineParams& fine) {
   coarse.intrinsic_full_graph = true;
   coarse.intrinsic_passes = kLargeMotionIntrinsicPasses;
+  coarse.alpha_reg_start_after_pass = kLargeMotionAlphaRegStartAfterPass;
+  coarse.alpha_reg_min = kLargeMotionAlphaRegMin;
+  coarse.fit_tolerance = kLargeMotionFitTolerance;
+  coarse.check_fit_first_tolerance = kLargeMotionCheckFitFirstTolerance;
   fine.max_rounds = kLargeMotionFineRounds;
 }
 

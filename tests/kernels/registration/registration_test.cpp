@@ -546,6 +546,26 @@ TEST(Alignment, AlignedInputStopsAfterTheFirstLevel) {
   EXPECT_LT(mean_error(c.source, c.truth), 0.002 * c.target.bbox_diagonal());
 }
 
+// check_fit_first_tolerance: the test before the first step has its own threshold when set (align keeps 0.05
+// there while its schedule runs down to a fit of 0.02 mean edge lengths).
+TEST(Alignment, FittedFirstHasItsOwnTolerance) {
+  const double edge = mean_edge_length(make_case([](const Vec3& p) { return p; }).source);
+  const double shift = 0.02 * edge;  // the nodes lie within about this of the target
+  auto run = [&](double fit_tolerance, double first_tolerance) {
+    Case c = make_case([&](const Vec3& p) { return Vec3(p + Vec3(shift, 0, 0)); });
+    CoarseParams p;
+    p.fit_tolerance = fit_tolerance;
+    p.check_fit_first_tolerance = first_tolerance;
+    return align_coarse(c.source, c.target, p);
+  };
+  EXPECT_TRUE(run(0.05, 0).fitted_at_start);       // the default: fit_tolerance decides
+  EXPECT_FALSE(run(0.001, 0).fitted_at_start);
+  EXPECT_TRUE(run(0.001, 0.05).fitted_at_start);   // its own threshold
+  const CoarseReport stepped = run(0.05, 0.001);
+  EXPECT_FALSE(stepped.fitted_at_start);
+  EXPECT_GE(stepped.iterations, 1);
+}
+
 TEST(Alignment, GraphDensityPreview) {
   Case c = make_case([](const Vec3& p) { return Vec3(p + Vec3(0.05, 0.02, 0)); });
   SurfaceMesh quarter = c.source.clone();
@@ -576,6 +596,12 @@ TEST(Alignment, BadParametersThrow) {
   EXPECT_THROW(align_coarse(c.source, c.target, p), InvalidInput);
   p = CoarseParams{};
   p.intrinsic_pass_max_iterations_per_level = 0;
+  EXPECT_THROW(align_coarse(c.source, c.target, p), InvalidInput);
+  p = CoarseParams{};
+  p.alpha_reg_start_after_pass = -1;
+  EXPECT_THROW(align_coarse(c.source, c.target, p), InvalidInput);
+  p = CoarseParams{};
+  p.check_fit_first_tolerance = std::nan("");
   EXPECT_THROW(align_coarse(c.source, c.target, p), InvalidInput);
   p = CoarseParams{};
   p.fit_tolerance = std::nan("");
@@ -632,6 +658,33 @@ TEST(Alignment, SeparablePcgMatchesDirectSolve) {
   const double diag = c1.target.bbox_diagonal();
   for (std::size_t i = 0; i < c1.source.vertices_size(); ++i)
     EXPECT_LT((c1.source.positions()[i] - c2.source.positions()[i]).norm(), 1e-4 * diag);
+}
+
+// CoarseParams::alpha_reg_start_after_pass: the full graph's first round after the low-density pass, and only then.
+TEST(Alignment, FullGraphAfterThePassStartsAtItsAlphaReg) {
+  const Eigen::Matrix3d R = rotation(15, Vec3(1, 1, 0));
+  auto first_alpha = [&](double start_after_pass, bool pass) {
+    Case c = make_case([&](const Vec3& p) { return Vec3(R * p * 1.1); });
+    CoarseParams q;
+    q.check_fit_first = false;
+    q.alpha_reg_start_after_pass = start_after_pass;
+    if (!pass) q.coarse_pass_misfit = 0;
+    const CoarseReport r = align_coarse(c.source, c.target, q);
+    EXPECT_EQ(r.coarse_pass_iterations > 0, pass);
+    EXPECT_FALSE(r.rounds.empty());
+    return r.rounds.empty() ? 0.0 : r.rounds.front().alpha_reg;
+  };
+  EXPECT_EQ(first_alpha(0, true), 1000);   // the paper's start
+  EXPECT_EQ(first_alpha(10, true), 10);
+  EXPECT_EQ(first_alpha(10, false), 1000);  // no pass: the paper's schedule
+  // `align` sets it, with the lower end of the schedule.
+  CoarseParams q;
+  FineParams f;
+  use_large_motion_alignment(q, f);
+  EXPECT_EQ(q.alpha_reg_start_after_pass, kLargeMotionAlphaRegStartAfterPass);
+  EXPECT_EQ(q.alpha_reg_min, kLargeMotionAlphaRegMin);
+  EXPECT_EQ(q.fit_tolerance, kLargeMotionFitTolerance);
+  EXPECT_EQ(q.check_fit_first_tolerance, kLargeMotionCheckFitFirstTolerance);
 }
 
 TEST(Alignment, OneAndTwoThreadsGiveIdenticalResults) {
