@@ -225,8 +225,8 @@ inline constexpr int kLargeMotionIntrinsicPasses = 1;
 //! lie within 0.02 mean edge lengths of their matches (fit_tolerance; samba stopped at 0.05; a pair found fitted
 //! before the first round still is at 0.05: kLargeMotionCheckFitFirstTolerance). Measured together
 //! (frame 1 -> 16, median over five re-samplings of the target, % of the diagonal; docs/results.md 2026-12-02):
-//! samba 0.152 -> 0.138, pcow 3.49 -> 3.46, elephant 1.11 -> 1.08, and bench/registration gap 15 (medians of four
-//! alternating runs) 47k 2.08 -> 1.73 s, 98k 4.13 -> 3.43 s: two levels fewer on the full graph, one more lower.
+//! samba 0.152 -> 0.138, pcow 3.49 -> 3.46, elephant 1.11 -> 1.08, and bench/registration gap 15 (medians of five
+//! alternating runs) 47k 1.90 -> 1.56 s, 98k 3.81 -> 3.09 s: two levels fewer on the full graph, one more lower.
 inline constexpr double kLargeMotionAlphaRegStartAfterPass = 10;
 inline constexpr double kLargeMotionAlphaRegMin = 0.01;
 inline constexpr double kLargeMotionFitTolerance = 0.02;

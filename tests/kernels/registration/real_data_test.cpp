@@ -270,8 +270,8 @@ TEST(RealData, ElephantLargeMotion) {
   TOPOTRACK_REQUIRE_DATA("elephant");
   // Median 1.08% of 6.25% (2026-12-02, the full graph from alpha_reg 10 to 0.01; 1.11% from 1000 to 0.1),
   // with one guided low-density pass on the first pass's graph and the
-  // intrinsic matches in the full graph; 1.44% without the guided pass, TOPOTRACK_TEST_INTRINSIC_PASSES=0;
-  // 3.42% without either, TOPOTRACK_TEST_INTRINSIC=0 TOPOTRACK_TEST_INTRINSIC_PASSES=0, and 3.40% then with one
+  // intrinsic matches in the full graph; 1.41% without the guided pass (1.44% before), TOPOTRACK_TEST_INTRINSIC_PASSES=0;
+  // 3.34% without either (3.42% before), TOPOTRACK_TEST_INTRINSIC=0 TOPOTRACK_TEST_INTRINSIC_PASSES=0, and 3.40% then with one
   // fine round), 3.88% at 78d1eea (3.09% at b4100c4, whose re-sampled targets differ; one re-sampling at
   // 0.8 before b4100c4: 3.41%; misfit 0.57%: the low-density
   // pass and backward matches at the pruned nodes, no pre-alignment); 4.27% without the backward matches
