@@ -85,6 +85,8 @@ std::vector<Binding> bindings(TrackerParams& p) {
       {"coarse.intrinsic_anchors", &p.coarse_params.intrinsic.anchors, 2, 1024},
       {"coarse.intrinsic_tolerance", &p.coarse_params.intrinsic.tolerance, 0, 1},
       {"coarse.intrinsic_misplaced_spacings", &p.coarse_params.intrinsic.misplaced_spacings, 0, 1e6},
+      {"coarse.dense_spacing_factor", &p.coarse_params.dense_spacing_factor, 0, 1e3},
+      {"coarse.dense_alpha_reg", &p.coarse_params.dense_alpha_reg, 1e-12, inf},
       // Speed between consecutive frames (our additions, kernels/registration/coarse.hpp).
       {"coarse.retract_rotations", &p.coarse_params.retract_rotations},
       {"coarse.check_fit_first", &p.coarse_params.check_fit_first},

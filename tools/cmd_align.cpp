@@ -70,6 +70,17 @@ nlohmann::json stage_json(nlohmann::json figures, std::initializer_list<std::pai
   return figures;
 }
 
+// One graph's rounds by phase (the low-density passes', the denser graph's).
+nlohmann::json phases_json(const CoarsePhases& p) {
+  return stage_json({{"nodes", p.nodes}, {"rounds", p.rounds}, {"pcg_iterations", p.pcg_iterations}, {"factorisations", p.factorisations}},
+                    {{"graph", p.seconds_graph},
+                     {"correspondences", p.seconds_correspondences},
+                     {"assembly", p.seconds_assembly},
+                     {"factorisation", p.seconds_factorisation},
+                     {"solve", p.seconds_solve},
+                     {"total", p.seconds_total}});
+}
+
 nlohmann::json run_coarse(SurfaceMesh& mesh, const TargetSurface& target, const CoarseParams& p) {
   const CoarseReport r = align_coarse(mesh, target, p);
   nlohmann::json rounds = nlohmann::json::array();
@@ -104,16 +115,8 @@ nlohmann::json run_coarse(SurfaceMesh& mesh, const TargetSurface& target, const 
                                    {"iterations", r.prealign.iterations},
                                    {"distance_start", r.prealign.distance_start},
                                    {"distance_end", r.prealign.distance_end}}},
-                     {"low_density", {{"nodes", r.low_density.nodes},
-                                      {"rounds", r.low_density.rounds},
-                                      {"pcg_iterations", r.low_density.pcg_iterations},
-                                      {"factorisations", r.low_density.factorisations},
-                                      {"seconds", {{"graph", r.low_density.seconds_graph},
-                                                   {"correspondences", r.low_density.seconds_correspondences},
-                                                   {"assembly", r.low_density.seconds_assembly},
-                                                   {"factorisation", r.low_density.seconds_factorisation},
-                                                   {"solve", r.low_density.seconds_solve},
-                                                   {"total", r.low_density.seconds_total}}}}},
+                     {"low_density", phases_json(r.low_density)},
+                     {"dense", phases_json(r.dense)},
                      {"rounds", rounds}},
                     {{"prealign", r.seconds_prealign},
                      {"intrinsic", r.seconds_intrinsic},

@@ -2,7 +2,8 @@
 // 1 + gap, gap 1 (consecutive frames, the tracker's case) or 15 (large motion, the registration
 // issue's pairs). Sizes: 0 samba (10k vertices), 1 elephant (42k), 2 and 3 the elephant source
 // re-meshed by improve_mesh to about 47k and 100k (the targets: coarse + fine <= 2 s and
-// <= 4 s on 2 cores); the target stays the re-sampled 42k frame. Further arguments: graph density (percent of the paper's) and
+// <= 4 s on 2 cores), the target stays the re-sampled 42k frame; 4 the samba source re-meshed to about 100k (a
+// pair the low-density pass leaves alone, so `align` ends it on the denser graph), its target the 10k frame. Further arguments: graph density (percent of the paper's) and
 // the cap on PCG iterations per Gauss–Newton round (100: the former default, 15: the current one), and
 // whether the large-motion stages run (rigid pre-alignment, low-density pass and backward matches, by
 // their misfit tests, and what `topotrack align` adds: use_large_motion_alignment), and the fine stage's form: vector displacements (0, the paper's) or displacements
@@ -56,8 +57,8 @@ const Fixture& fixture(int size, int gap) {
   auto& f = cache[{size, gap}];
   if (!f) {
     f = std::make_unique<Fixture>();
-    test::AlignmentPair pair = test::make_pair(size == 0 ? "samba" : "elephant", 1, gap);
-    const double refine[] = {1.0, 1.0, 0.85, 0.563};  // edge length factors of the re-meshed sizes
+    test::AlignmentPair pair = test::make_pair(size == 0 || size == 4 ? "samba" : "elephant", 1, gap);
+    const double refine[] = {1.0, 1.0, 0.85, 0.563, 0.24};  // edge length factors of the re-meshed sizes
     f->source = size >= 2 ? test::resample(pair.source, refine[size]) : std::move(pair.source);
     f->target = std::make_unique<TargetSurface>(TargetSurface::from_mesh(pair.target_mesh));
   }
@@ -89,6 +90,8 @@ void alignment_counters(benchmark::State& state, const CoarseReport& c, const Fi
   state.counters["pass_solve_s"] = c.low_density.seconds_solve;
   state.counters["pass_pcg_iterations"] = c.low_density.pcg_iterations;
   state.counters["pass_nodes"] = c.low_density.nodes;
+  state.counters["dense_s"] = c.dense.seconds_total;
+  state.counters["dense_nodes"] = c.dense.nodes;
 }
 
 // Comparisons without rebuilding: TOPOTRACK_BENCH_COARSE="name=value,..." overrides CoarseParams
@@ -121,6 +124,7 @@ void override_params(CoarseParams& p) {
       else if (name == "alpha_reg_start_after_pass") p.alpha_reg_start_after_pass = v;
       else if (name == "intrinsic_passes") p.intrinsic_passes = int(v);
       else if (name == "intrinsic_full_graph") p.intrinsic_full_graph = v != 0;
+      else if (name == "dense_spacing_factor") p.dense_spacing_factor = v;
       else std::fprintf(stderr, "TOPOTRACK_BENCH_COARSE: unknown field %s\n", name.c_str());
     }
     at = end + 1;
@@ -172,6 +176,7 @@ BENCHMARK(BM_AlignCoarseFine)
     ->ArgsProduct({{2, 3}, {100}, {1, 15}, {15}, {1}, {1}})
     ->Args({0, 100, 1, 15, 1, 0})
     ->Args({0, 100, 15, 15, 1, 0})
+    ->Args({4, 100, 15, 15, 1, 0})
     ->Args({1, 100, 15, 15, 1, 0})
     ->Args({2, 25, 15, 15, 1, 0})
     ->ArgNames({"size", "density", "gap", "pcg", "large", "normal"})

@@ -420,7 +420,7 @@ struct NodeGuide {
 CoarseReport align_coarse_impl(SurfaceMesh& mesh, const TargetSurface& target, const CoarseParams& params,
                                const NodeGuide* guide, std::shared_ptr<const DeformationGraph>* built = nullptr);
 
-// A low-density pass's report added to CoarseReport::low_density.
+// A low-density pass's report added to CoarseReport::low_density (or the denser graph's to CoarseReport::dense).
 void add_pass(CoarsePhases& to, const CoarseReport& pass) {
   to.nodes = pass.nodes;
   to.rounds += pass.iterations;
@@ -515,7 +515,40 @@ std::optional<NodeGuide> intrinsic_stage(SurfaceMesh& mesh, const TargetSurface&
 }  // namespace
 
 CoarseReport align_coarse(SurfaceMesh& mesh, const TargetSurface& target, const CoarseParams& params) {
-  return align_coarse_impl(mesh, target, params, nullptr);
+  const auto t_total = Clock::now();
+  if (!(params.dense_spacing_factor >= 0) || !(params.dense_alpha_reg > 0))
+    TT_THROW(InvalidInput, "align_coarse: invalid parameters");
+  CoarseReport rep = align_coarse_impl(mesh, target, params, nullptr);
+  if (!(params.dense_spacing_factor > 0) || rep.coarse_pass_iterations > 0 || rep.fitted_at_start || rep.iterations == 0)
+    return rep;
+  // The denser graph (CoarseParams::dense_spacing_factor): one level on the mesh as the schedule left it, the paper's
+  // normal rays and energy, none of the large-motion stages (the misfit called for none of them).
+  CoarseParams dense = params;
+  dense.node_spacing_factor = params.dense_spacing_factor;
+  dense.alpha_reg_start = params.dense_alpha_reg;
+  dense.alpha_reg_min = params.dense_alpha_reg;
+  dense.prealign_misfit = 0;
+  dense.coarse_pass_misfit = 0;
+  dense.backward_misfit = 0;
+  dense.backward_weight = 0;
+  dense.closest_point_levels = 0;
+  dense.intrinsic_full_graph = false;
+  dense.intrinsic_passes = 0;
+  dense.check_fit_first = false;  // the full graph's nodes are fitted; the denser graph's finer fit is the point
+  if (params.observer)
+    dense.observer = [&](CoarseSnapshot snap) {
+      snap.stage = CoarseStage::DenseLevel;
+      params.observer(snap);
+    };
+  if (params.match_override)
+    dense.match_override = [&](CoarseMatchRound round, std::vector<Correspondence>& c) {
+      round.stage = CoarseStage::DenseLevel;
+      params.match_override(round, c);
+    };
+  const CoarseReport dr = align_coarse_impl(mesh, target, dense, nullptr);
+  add_pass(rep.dense, dr);
+  rep.seconds_total = seconds_since(t_total);
+  return rep;
 }
 
 namespace {
@@ -616,8 +649,8 @@ CoarseReport align_coarse_impl(SurfaceMesh& mesh, const TargetSurface& target, c
   rep.node_spacing = spacing;
   const double fitted_first = params.check_fit_first_tolerance > 0 ? params.check_fit_first_tolerance : params.fit_tolerance;
   if (params.check_fit_first && fitted_first > 0 && !guide) {
-    // Converged before the first step: the nodes already lie on their correspondences (the same
-    // measure and threshold that end the schedule after a round), so the graph is not completed.
+    // Converged before the first step: the nodes already lie on their correspondences (the measure that
+    // ends the schedule after a round, within check_fit_first_tolerance), so the graph is not completed.
     const auto tc = Clock::now();
     const std::size_t n = nodes.size();
     std::vector<Vec3> x(n), normal(n);

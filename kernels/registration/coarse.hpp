@@ -38,6 +38,7 @@ enum class CoarseStage {
   Prealigned,       //!< after the rigid pre-alignment (only when it ran)
   LowDensityLevel,  //!< after an alpha_reg level of the low-density pass
   Level,            //!< after an alpha_reg level of the full graph
+  DenseLevel,       //!< after the level of the denser graph (CoarseParams::dense_spacing_factor)
 };
 
 //! A snapshot for diagnostics: the mesh's vertex positions (by handle index) at the end of a stage.
@@ -207,6 +208,14 @@ struct CoarseParams {
   //! 1.07 % (1.06-1.59) with 8 at about twice the pass's rounds; two guided passes with 3: 1.11 %.
   int intrinsic_pass_max_iterations_per_level = 3;
   IntrinsicParams intrinsic;
+  //! A denser graph after the schedule (our addition, the finer end of the low-density pass's coarse-to-fine;
+  //! 0: none, the default and the tracker's). Where the low-density pass did not run (the motion within the
+  //! normal rays' reach) and the full graph took at least one round, a graph with nodes every
+  //! `dense_spacing_factor` mean edge lengths, sampled on the mesh as the schedule left it, runs one level at
+  //! `dense_alpha_reg` (at most max_iterations_per_level rounds): its rays fit more of the surface than the full
+  //! graph's nodes can. `topotrack align` takes kLargeMotionDenseSpacingFactor.
+  double dense_spacing_factor = 0;
+  double dense_alpha_reg = 0.01;
   //! Diagnostics: when set, called after the pre-alignment and after every alpha_reg level (then
   //! costs one skinning of the mesh per level); the result does not depend on it.
   std::function<void(const CoarseSnapshot&)> observer;
@@ -231,6 +240,13 @@ inline constexpr double kLargeMotionAlphaRegStartAfterPass = 10;
 inline constexpr double kLargeMotionAlphaRegMin = 0.01;
 inline constexpr double kLargeMotionFitTolerance = 0.02;
 inline constexpr double kLargeMotionCheckFitFirstTolerance = 0.05;  // the library's fit_tolerance (see there)
+//! CoarseParams::dense_spacing_factor for `topotrack align` (at dense_alpha_reg 0.01, the end of its schedule). Measured
+//! (frame k -> k+15, % of the diagonal; docs/results.md 2026-12-02): samba frame 1 median over five re-samplings of the
+//! target 0.138 -> 0.119 (2 or 4 rounds instead of 8: 0.127 / 0.123), k = 3, 5, 7 (one re-sampling) 0.165 / 0.270 /
+//! 0.358 -> 0.139 / 0.224 / 0.296 (k = 9 runs the pass: 0.501); spacing 2 0.114. Where the low-density pass runs it does
+//! not: after the pass the elephant 1.08 -> 1.05 and pcow 3.46 -> 3.36 for 0.6 s more at 42k vertices (over issue 4's
+//! time at 98k). Cost: bench/registration size 4 (samba re-meshed to 98k) 2.72 -> 4.0-4.5 s (the level 1.2-1.3 s).
+inline constexpr double kLargeMotionDenseSpacingFactor = 2.5;
 
 //! One correspondence + Gauss–Newton round.
 struct CoarseRound {
@@ -282,6 +298,8 @@ struct CoarseReport {
   double seconds_intrinsic = 0;     //!< the intrinsic matches (within seconds_prealign)
   //! The low-density pass and the guided passes summed (within seconds_prealign; zero when none ran).
   CoarsePhases low_density;
+  //! The denser graph's level (CoarseParams::dense_spacing_factor; within seconds_total only; zero when it did not run).
+  CoarsePhases dense;
   double misfit_start = 0;          //!< trimmed mean closest-point distance before anything / target diagonal
   RigidIcpReport prealign;
   //! The misfit test, the rigid pre-alignment, the low-density passes and the intrinsic matches

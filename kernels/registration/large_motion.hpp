@@ -4,7 +4,8 @@
 //! places (CoarseParams::intrinsic_full_graph) after one low-density pass guided by the pass's own misplaced
 //! nodes (kLargeMotionIntrinsicPasses), the full graph's levels run from alpha_reg 10 down to 0.01
 //! (kLargeMotionAlphaRegStartAfterPass, kLargeMotionAlphaRegMin, kLargeMotionFitTolerance and
-//! kLargeMotionCheckFitFirstTolerance), and the fine stage takes
+//! kLargeMotionCheckFitFirstTolerance), a pair within the normal rays' reach ends on a denser graph
+//! (kLargeMotionDenseSpacingFactor), and the fine stage takes
 //! further rounds (kLargeMotionFineRounds). The rigid pre-alignment, the low-density pass and the backward matches are
 //! library defaults already, gated by the measured misfit. One place for the tool, the tests and the bench.
 #include "kernels/registration/coarse.hpp"
@@ -19,6 +20,7 @@ inline void use_large_motion_alignment(CoarseParams& coarse, FineParams& fine) {
   coarse.alpha_reg_min = kLargeMotionAlphaRegMin;
   coarse.fit_tolerance = kLargeMotionFitTolerance;
   coarse.check_fit_first_tolerance = kLargeMotionCheckFitFirstTolerance;
+  coarse.dense_spacing_factor = kLargeMotionDenseSpacingFactor;
   fine.max_rounds = kLargeMotionFineRounds;
 }
 

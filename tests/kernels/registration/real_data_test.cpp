@@ -30,7 +30,8 @@ struct Figures {
 // (per-round figures), TOPOTRACK_TEST_RIGID_TRUTH=1 (the error of the best rigid motion: pcow 9.5%, elephant 6.0%),
 // TOPOTRACK_TEST_INTRINSIC=0|1, TOPOTRACK_TEST_INTRINSIC_PASSES=n (CoarseParams::intrinsic_full_graph,
 // intrinsic_passes), TOPOTRACK_TEST_INTRINSIC_ANCHORS=n, TOPOTRACK_TEST_INTRINSIC_MISPLACED=x, TOPOTRACK_TEST_FINE_ROUNDS=n, TOPOTRACK_TEST_FINE_MAX_ROUNDS=n, TOPOTRACK_TEST_FINE_MORE_RESIDUAL=x, TOPOTRACK_TEST_FINE_NORMAL_ANGLE=deg,
-// TOPOTRACK_TEST_FINE_NORMAL_DISPLACEMENT=0|1 (FineParams),
+// TOPOTRACK_TEST_FINE_NORMAL_DISPLACEMENT=0|1 (FineParams), TOPOTRACK_TEST_DENSE_SPACING=x (0: no denser graph),
+// TOPOTRACK_TEST_DENSE_ALPHA=x (dense_spacing_factor, dense_alpha_reg),
 // TOPOTRACK_TEST_TRUTH_MATCHES=L (each node matched to the closest target point of its ground truth in the
 // first L alpha_reg levels of both stages: what the correspondences cost, docs/results.md).
 void env_double(const char* name, double& value) {
@@ -87,6 +88,8 @@ Figures run_pair(const std::string& name, int frame, int gap, double edge_factor
   env_double("TOPOTRACK_TEST_ALPHA_POINT", params.alpha_point);
   env_double("TOPOTRACK_TEST_ALPHA_PLANE", params.alpha_plane);
   env_double("TOPOTRACK_TEST_ALPHA_REG_MIN", params.alpha_reg_min);
+  env_double("TOPOTRACK_TEST_DENSE_SPACING", params.dense_spacing_factor);
+  env_double("TOPOTRACK_TEST_DENSE_ALPHA", params.dense_alpha_reg);
   env_double("TOPOTRACK_TEST_MAX_CLOSEST_RATIO", params.max_closest_ratio);
   env_double("TOPOTRACK_TEST_MAX_NORMAL_ANGLE", params.max_normal_angle_deg);
   env_int("TOPOTRACK_TEST_MAX_ITERATIONS", params.max_iterations);
@@ -119,7 +122,8 @@ Figures run_pair(const std::string& name, int frame, int gap, double edge_factor
     test::print_breakdown("projection", test::error_breakdown(projected.positions(), pair, target, truth_index));
     params.observer = [&](const CoarseSnapshot& s) {
       char label[64];
-      const char* stage = s.stage == CoarseStage::Prealigned ? "rigid" : s.stage == CoarseStage::LowDensityLevel ? "low" : "full";
+      const char* stage = s.stage == CoarseStage::Prealigned ? "rigid" : s.stage == CoarseStage::LowDensityLevel ? "low"
+                          : s.stage == CoarseStage::DenseLevel    ? "dense" : "full";
       std::snprintf(label, sizeof label, "%s a=%g (%d r, fit %.2f)", stage, s.alpha_reg, s.rounds, s.fit_distance);
       test::print_breakdown(label, test::error_breakdown(s.positions, pair, target, truth_index));
     };
@@ -224,8 +228,8 @@ void expect_improvement(const Figures& f, double max_ratio_to_unaligned) {
 TEST(RealData, SambaLargeMotion) {
   TOPOTRACK_REQUIRE_DATA("samba");
   const Figures f = run_resampled("samba", 1, 15);
-  expect_improvement(f, 0.35);
-  EXPECT_LE(f.aligned.mean_truth, 0.0025);  // measured 0.138% (median; 0.152% with alpha_reg down to 0.1 only)
+  expect_improvement(f, 0.2);  // issue 4's fifth: measured 0.193 of the unaligned 0.617%
+  EXPECT_LE(f.aligned.mean_truth, 0.0025);  // measured 0.119% (median; 0.138% without the denser graph, 0.152% with alpha_reg down to 0.1 only)
   EXPECT_LE(f.aligned.mean_target, 0.001);
 }
 TEST(RealData, PcowLargeMotion) {

@@ -601,6 +601,12 @@ TEST(Alignment, BadParametersThrow) {
   p.alpha_reg_start_after_pass = -1;
   EXPECT_THROW(align_coarse(c.source, c.target, p), InvalidInput);
   p = CoarseParams{};
+  p.dense_spacing_factor = -1;
+  EXPECT_THROW(align_coarse(c.source, c.target, p), InvalidInput);
+  p = CoarseParams{};
+  p.dense_alpha_reg = 0;
+  EXPECT_THROW(align_coarse(c.source, c.target, p), InvalidInput);
+  p = CoarseParams{};
   p.check_fit_first_tolerance = std::nan("");
   EXPECT_THROW(align_coarse(c.source, c.target, p), InvalidInput);
   p = CoarseParams{};
@@ -687,6 +693,59 @@ TEST(Alignment, FullGraphAfterThePassStartsAtItsAlphaReg) {
   EXPECT_EQ(q.check_fit_first_tolerance, kLargeMotionCheckFitFirstTolerance);
 }
 
+// CoarseParams::dense_spacing_factor: one level on a denser graph where the low-density pass did not run, and only there.
+TEST(Alignment, DenseGraphEndsAPairWithoutThePass) {
+  const Eigen::Matrix3d R = rotation(8, Vec3(1, 1, 0));
+  auto transform = [&](const Vec3& p) { return Vec3(R * Vec3(1.1 * p.x(), p.y(), 0.95 * p.z())); };
+  auto run = [&](double dense_spacing, bool pass, std::vector<CoarseStage>* stages = nullptr) {
+    Case c = make_case(transform);
+    CoarseParams q;
+    q.check_fit_first = false;
+    q.dense_spacing_factor = dense_spacing;
+    if (!pass) q.coarse_pass_misfit = 0;
+    if (stages) q.observer = [&](const CoarseSnapshot& s) { stages->push_back(s.stage); };
+    const CoarseReport r = align_coarse(c.source, c.target, q);
+    EXPECT_EQ(r.coarse_pass_iterations > 0, pass);
+    return std::pair{r, mean_error(c.source, c.truth)};
+  };
+  std::vector<CoarseStage> stages;
+  const auto [dense, dense_error] = run(2.5, false, &stages);
+  const auto [plain, plain_error] = run(0, false);
+  EXPECT_EQ(plain.dense.rounds, 0);
+  EXPECT_GT(dense.dense.rounds, 0);
+  EXPECT_LE(dense.dense.rounds, CoarseParams{}.max_iterations_per_level);  // one level
+  EXPECT_GT(dense.dense.nodes, 2 * dense.nodes);                           // (4 / 2.5)^2 = 2.56 times the nodes
+  EXPECT_EQ(dense.nodes, plain.nodes);
+  EXPECT_EQ(dense.iterations, plain.iterations);  // the schedule before it unchanged
+  ASSERT_FALSE(stages.empty());
+  EXPECT_EQ(stages.back(), CoarseStage::DenseLevel);
+  EXPECT_EQ(std::count(stages.begin(), stages.end(), CoarseStage::DenseLevel), 1);
+  EXPECT_LT(dense_error, plain_error);
+  EXPECT_GE(dense.seconds_total, dense.dense.seconds_total);
+  // Where the low-density pass ran, none.
+  const Eigen::Matrix3d R2 = rotation(15, Vec3(1, 1, 0));
+  Case c = make_case([&](const Vec3& p) { return Vec3(R2 * p * 1.1); });
+  CoarseParams q;
+  q.check_fit_first = false;
+  q.dense_spacing_factor = 2.5;
+  const CoarseReport with_pass = align_coarse(c.source, c.target, q);
+  EXPECT_GT(with_pass.coarse_pass_iterations, 0);
+  EXPECT_EQ(with_pass.dense.rounds, 0);
+  // Nor where the nodes were found fitted before the first round.
+  Case fitted = make_case([](const Vec3& p) { return p; });
+  q = CoarseParams{};
+  q.dense_spacing_factor = 2.5;
+  const CoarseReport none = align_coarse(fitted.source, fitted.target, q);
+  EXPECT_TRUE(none.fitted_at_start);
+  EXPECT_EQ(none.dense.rounds, 0);
+  // `align` sets it.
+  FineParams f;
+  q = CoarseParams{};
+  use_large_motion_alignment(q, f);
+  EXPECT_EQ(q.dense_spacing_factor, kLargeMotionDenseSpacingFactor);
+  EXPECT_EQ(CoarseParams{}.dense_spacing_factor, 0);  // the library's (and the tracker's) default: none
+}
+
 TEST(Alignment, OneAndTwoThreadsGiveIdenticalResults) {
   auto run = [](int threads) {
     tbb::task_arena arena(threads);
@@ -715,6 +774,12 @@ TEST(Alignment, OneAndTwoThreadsGiveIdenticalResults) {
       EXPECT_EQ(er.low_density.rounds, er.coarse_pass_iterations);
       EXPECT_GT(er.low_density.factorisations, 1);  // the first pass's and the guided pass's
       out.insert(out.end(), e.source.positions().begin(), e.source.positions().end());
+      // `align`'s configuration where the pass does not run: the denser graph's level.
+      const Eigen::Matrix3d R3 = rotation(8, Vec3(1, 1, 0));
+      Case g = make_case([&](const Vec3& p) { return Vec3(R3 * p); });
+      q.coarse_pass_misfit = 0;
+      EXPECT_GT(align_coarse(g.source, g.target, q).dense.rounds, 0);
+      out.insert(out.end(), g.source.positions().begin(), g.source.positions().end());
     });
     return out;
   };
