@@ -74,6 +74,7 @@ std::vector<Binding> bindings(TrackerParams& p) {
       {"coarse.coarse_pass_alpha_reg_min", &p.coarse_params.coarse_pass_alpha_reg_min, 1e-12, inf},
       {"coarse.max_iterations_per_level_after_pass", &p.coarse_params.max_iterations_per_level_after_pass, 1, 1e6},
       {"coarse.alpha_reg_start_after_pass", &p.coarse_params.alpha_reg_start_after_pass, 0, inf},
+      {"coarse.alpha_reg_start_without_pass", &p.coarse_params.alpha_reg_start_without_pass, 0, inf},
       {"coarse.closest_point_levels", &p.coarse_params.closest_point_levels, 0, 16},
       {"coarse.backward_weight", &p.coarse_params.backward_weight, 0, inf},
       {"coarse.backward_misfit", &p.coarse_params.backward_misfit, 0, 1},

@@ -122,6 +122,7 @@ void override_params(CoarseParams& p) {
       else if (name == "node_spacing_factor") p.node_spacing_factor = v;
       else if (name == "alpha_reg_min") p.alpha_reg_min = v;
       else if (name == "alpha_reg_start_after_pass") p.alpha_reg_start_after_pass = v;
+      else if (name == "alpha_reg_start_without_pass") p.alpha_reg_start_without_pass = v;
       else if (name == "intrinsic_passes") p.intrinsic_passes = int(v);
       else if (name == "intrinsic_full_graph") p.intrinsic_full_graph = v != 0;
       else if (name == "dense_spacing_factor") p.dense_spacing_factor = v;

@@ -21,6 +21,20 @@
 namespace topotrack {
 namespace {
 
+// A nested stage (the low-density pass, the denser graph) calls the caller's diagnostics hooks under its own stage.
+void report_hooks_as(CoarseParams& nested, const CoarseParams& params, CoarseStage stage) {
+  if (params.observer)
+    nested.observer = [&params, stage](CoarseSnapshot snap) {
+      snap.stage = stage;
+      params.observer(snap);
+    };
+  if (params.match_override)
+    nested.match_override = [&params, stage](CoarseMatchRound round, std::vector<Correspondence>& c) {
+      round.stage = stage;
+      params.match_override(round, c);
+    };
+}
+
 using Clock = std::chrono::steady_clock;
 double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
@@ -535,16 +549,7 @@ CoarseReport align_coarse(SurfaceMesh& mesh, const TargetSurface& target, const 
   dense.intrinsic_full_graph = false;
   dense.intrinsic_passes = 0;
   dense.check_fit_first = false;  // the full graph's nodes are fitted; the denser graph's finer fit is the point
-  if (params.observer)
-    dense.observer = [&](CoarseSnapshot snap) {
-      snap.stage = CoarseStage::DenseLevel;
-      params.observer(snap);
-    };
-  if (params.match_override)
-    dense.match_override = [&](CoarseMatchRound round, std::vector<Correspondence>& c) {
-      round.stage = CoarseStage::DenseLevel;
-      params.match_override(round, c);
-    };
+  report_hooks_as(dense, params, CoarseStage::DenseLevel);
   const CoarseReport dr = align_coarse_impl(mesh, target, dense, nullptr);
   add_pass(rep.dense, dr);
   rep.seconds_total = seconds_since(t_total);
@@ -563,7 +568,8 @@ CoarseReport align_coarse_impl(SurfaceMesh& mesh, const TargetSurface& target, c
       params.max_iterations_per_level < 1 || params.max_iterations_per_level_after_pass < 1 ||
       !(params.damping > 0) || !(params.step_tolerance >= 0) || !(params.fit_tolerance >= 0) ||
       !(params.stall_ratio >= 0) || !(params.prealign_misfit >= 0) || params.closest_point_levels < 0 ||
-      !(params.alpha_reg_start_after_pass >= 0) || !(params.check_fit_first_tolerance >= 0) ||
+      !(params.alpha_reg_start_after_pass >= 0) || !(params.alpha_reg_start_without_pass >= 0) ||
+      !(params.check_fit_first_tolerance >= 0) ||
       !(params.coarse_pass_misfit >= 0) || !(params.coarse_pass_density > 0) || params.coarse_pass_density > 1 ||
       !(params.coarse_pass_alpha_reg_min > 0) || !(params.backward_weight >= 0) || !(params.backward_misfit >= 0) ||
       !(params.backward_all_misfit >= 0) || params.intrinsic_passes < 0 || params.intrinsic_pass_max_iterations_per_level < 1 ||
@@ -577,6 +583,7 @@ CoarseReport align_coarse_impl(SurfaceMesh& mesh, const TargetSurface& target, c
   auto t0 = Clock::now();
   const double edge = mean_edge_length(mesh);
   bool large_motion = false;
+  bool pass_skipped = false;  // the misfit was measured and called for no low-density pass
   // Backward correspondences (target -> nodes) for large motion: for the nodes whose forward match is
   // pruned, or for every node (`backward_all`); always when their misfit threshold is 0.
   bool backward = params.backward_weight > 0 && params.backward_misfit == 0;
@@ -588,6 +595,7 @@ CoarseReport align_coarse_impl(SurfaceMesh& mesh, const TargetSurface& target, c
     backward = backward || (params.backward_weight > 0 && rep.misfit_start > params.backward_misfit);
     backward_all = backward_all || (backward && rep.misfit_start > params.backward_all_misfit);
     const bool pass_runs = params.coarse_pass_misfit > 0 && rep.misfit_start > params.coarse_pass_misfit;
+    pass_skipped = params.coarse_pass_misfit > 0 && !pass_runs;
     // The intrinsic stage's distances are the rest state's: its edge graph before anything moves the mesh.
     const bool intrinsic = pass_runs && (params.intrinsic_full_graph || params.intrinsic_passes > 0);
     const EdgeGraph rest_graph = intrinsic ? edge_graph(mesh) : EdgeGraph{};
@@ -606,16 +614,7 @@ CoarseReport align_coarse_impl(SurfaceMesh& mesh, const TargetSurface& target, c
       pass.backward_misfit = 0;
       pass.backward_all_misfit = backward_all ? 0 : std::numeric_limits<double>::infinity();
       if (!backward) pass.backward_weight = 0;
-      if (params.observer)
-        pass.observer = [&](CoarseSnapshot snap) {
-          snap.stage = CoarseStage::LowDensityLevel;
-          params.observer(snap);
-        };
-      if (params.match_override)
-        pass.match_override = [&](CoarseMatchRound round, std::vector<Correspondence>& c) {
-          round.stage = CoarseStage::LowDensityLevel;
-          params.match_override(round, c);
-        };
+      report_hooks_as(pass, params, CoarseStage::LowDensityLevel);
       pass.intrinsic_passes = 0;
       pass.intrinsic_full_graph = false;
       std::shared_ptr<const DeformationGraph> pass_graph;
@@ -713,9 +712,9 @@ CoarseReport align_coarse_impl(SurfaceMesh& mesh, const TargetSurface& target, c
   const TargetSamples samples =
       backward ? sample_target(target, std::size_t(params.backward_samples_per_node) * nn) : TargetSamples{};
   Eigen::VectorXd grad;
-  double alpha_reg = rep.coarse_pass_iterations > 0 && params.alpha_reg_start_after_pass > 0
-                         ? params.alpha_reg_start_after_pass
-                         : params.alpha_reg_start;
+  double alpha_reg = params.alpha_reg_start;
+  if (rep.coarse_pass_iterations > 0 && params.alpha_reg_start_after_pass > 0) alpha_reg = params.alpha_reg_start_after_pass;
+  if (pass_skipped && params.alpha_reg_start_without_pass > 0) alpha_reg = params.alpha_reg_start_without_pass;
   int level_iterations = 0;
   const int per_level =
       rep.coarse_pass_iterations > 0 ? params.max_iterations_per_level_after_pass : params.max_iterations_per_level;

@@ -171,6 +171,11 @@ struct CoarseParams {
   //! at 1000 and 100 (3 rounds each) moved little: the elephant frame 1 -> 16 2.21 -> 2.19 % of the diagonal
   //! over both. `topotrack align` starts at kLargeMotionAlphaRegStartAfterPass; the tracker keeps 1000.
   double alpha_reg_start_after_pass = 0;
+  //! The full graph's first alpha_reg where the misfit was measured and called for no low-density pass (our addition;
+  //! 0: alpha_reg_start). The motion is then within the normal rays' reach, and the levels at 1000 and 100 spend their
+  //! rounds holding the graph near rigid. `topotrack align` starts at kLargeMotionAlphaRegStartWithoutPass; the
+  //! tracker keeps 1000.
+  double alpha_reg_start_without_pass = 0;
   //! Large motion (our addition, the target -> source half of a symmetric fit): when the misfit (see
   //! prealign_misfit) exceeds `backward_misfit`, each round also matches the target to the nodes
   //! (find_backward_correspondences, about `backward_samples_per_node` target samples per node) and
@@ -247,6 +252,12 @@ inline constexpr double kLargeMotionCheckFitFirstTolerance = 0.05;  // the libra
 //! not: after the pass the elephant 1.08 -> 1.05 and pcow 3.46 -> 3.36 for 0.6 s more at 42k vertices (over issue 4's
 //! time at 98k). Cost: bench/registration size 4 (samba re-meshed to 98k) 2.72 -> 4.0-4.5 s (the level 1.2-1.3 s).
 inline constexpr double kLargeMotionDenseSpacingFactor = 2.5;
+//! CoarseParams::alpha_reg_start_without_pass for `topotrack align`. Measured (samba frame k -> k+15 without the pass, % of
+//! the diagonal; docs/results.md 2026-12-02): frame 1 median over five re-samplings 0.1191 either way in 19 rounds
+//! instead of 32, k = 3 / 5 / 7 0.1387 / 0.2239 / 0.2956 -> 0.1387 / 0.2250 / 0.2884 in 26 / 26 / 32 rounds instead of
+//! 40; bench/registration size 4 (samba re-meshed to 98k, with the denser graph) 4.40-4.53 -> 3.47-3.67 s. Where the pass
+//! runs (pcow, the elephant) nothing changes.
+inline constexpr double kLargeMotionAlphaRegStartWithoutPass = 10;
 
 //! One correspondence + Gauss–Newton round.
 struct CoarseRound {

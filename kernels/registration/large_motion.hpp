@@ -2,10 +2,10 @@
 //! What `topotrack align` adds to the library's defaults for a pair far apart (our additions; the tracker,
 //! between consecutive frames, keeps the defaults): the full graph's misplaced nodes follow their intrinsic
 //! places (CoarseParams::intrinsic_full_graph) after one low-density pass guided by the pass's own misplaced
-//! nodes (kLargeMotionIntrinsicPasses), the full graph's levels run from alpha_reg 10 down to 0.01
-//! (kLargeMotionAlphaRegStartAfterPass, kLargeMotionAlphaRegMin, kLargeMotionFitTolerance and
-//! kLargeMotionCheckFitFirstTolerance), a pair within the normal rays' reach ends on a denser graph
-//! (kLargeMotionDenseSpacingFactor), and the fine stage takes
+//! nodes (kLargeMotionIntrinsicPasses), the full graph's levels run from alpha_reg 10 down to 0.01 with or without
+//! the pass (kLargeMotionAlphaRegStartAfterPass, kLargeMotionAlphaRegStartWithoutPass, kLargeMotionAlphaRegMin,
+//! kLargeMotionFitTolerance and kLargeMotionCheckFitFirstTolerance), a pair within the normal rays' reach ends on a
+//! denser graph (kLargeMotionDenseSpacingFactor), and the fine stage takes
 //! further rounds (kLargeMotionFineRounds). The rigid pre-alignment, the low-density pass and the backward matches are
 //! library defaults already, gated by the measured misfit. One place for the tool, the tests and the bench.
 #include "kernels/registration/coarse.hpp"
@@ -17,6 +17,7 @@ inline void use_large_motion_alignment(CoarseParams& coarse, FineParams& fine) {
   coarse.intrinsic_full_graph = true;
   coarse.intrinsic_passes = kLargeMotionIntrinsicPasses;
   coarse.alpha_reg_start_after_pass = kLargeMotionAlphaRegStartAfterPass;
+  coarse.alpha_reg_start_without_pass = kLargeMotionAlphaRegStartWithoutPass;
   coarse.alpha_reg_min = kLargeMotionAlphaRegMin;
   coarse.fit_tolerance = kLargeMotionFitTolerance;
   coarse.check_fit_first_tolerance = kLargeMotionCheckFitFirstTolerance;

@@ -31,7 +31,7 @@ struct Figures {
 // TOPOTRACK_TEST_INTRINSIC=0|1, TOPOTRACK_TEST_INTRINSIC_PASSES=n (CoarseParams::intrinsic_full_graph,
 // intrinsic_passes), TOPOTRACK_TEST_INTRINSIC_ANCHORS=n, TOPOTRACK_TEST_INTRINSIC_MISPLACED=x, TOPOTRACK_TEST_FINE_ROUNDS=n, TOPOTRACK_TEST_FINE_MAX_ROUNDS=n, TOPOTRACK_TEST_FINE_MORE_RESIDUAL=x, TOPOTRACK_TEST_FINE_NORMAL_ANGLE=deg,
 // TOPOTRACK_TEST_FINE_NORMAL_DISPLACEMENT=0|1 (FineParams), TOPOTRACK_TEST_DENSE_SPACING=x (0: no denser graph),
-// TOPOTRACK_TEST_DENSE_ALPHA=x (dense_spacing_factor, dense_alpha_reg),
+// TOPOTRACK_TEST_DENSE_ALPHA=x (dense_spacing_factor, dense_alpha_reg), TOPOTRACK_TEST_ALPHA_START_WITHOUT_PASS=x,
 // TOPOTRACK_TEST_TRUTH_MATCHES=L (each node matched to the closest target point of its ground truth in the
 // first L alpha_reg levels of both stages: what the correspondences cost, docs/results.md).
 void env_double(const char* name, double& value) {
@@ -85,6 +85,7 @@ Figures run_pair(const std::string& name, int frame, int gap, double edge_factor
   env_double("TOPOTRACK_TEST_CONVERGENCE_TOLERANCE", params.convergence_tolerance);
   env_double("TOPOTRACK_TEST_ALPHA_REG_START", params.alpha_reg_start);
   env_double("TOPOTRACK_TEST_ALPHA_START_AFTER_PASS", params.alpha_reg_start_after_pass);
+  env_double("TOPOTRACK_TEST_ALPHA_START_WITHOUT_PASS", params.alpha_reg_start_without_pass);
   env_double("TOPOTRACK_TEST_ALPHA_POINT", params.alpha_point);
   env_double("TOPOTRACK_TEST_ALPHA_PLANE", params.alpha_plane);
   env_double("TOPOTRACK_TEST_ALPHA_REG_MIN", params.alpha_reg_min);

@@ -598,15 +598,6 @@ TEST(Alignment, BadParametersThrow) {
   p.intrinsic_pass_max_iterations_per_level = 0;
   EXPECT_THROW(align_coarse(c.source, c.target, p), InvalidInput);
   p = CoarseParams{};
-  p.alpha_reg_start_after_pass = -1;
-  EXPECT_THROW(align_coarse(c.source, c.target, p), InvalidInput);
-  p = CoarseParams{};
-  p.dense_spacing_factor = -1;
-  EXPECT_THROW(align_coarse(c.source, c.target, p), InvalidInput);
-  p = CoarseParams{};
-  p.dense_alpha_reg = 0;
-  EXPECT_THROW(align_coarse(c.source, c.target, p), InvalidInput);
-  p = CoarseParams{};
   p.check_fit_first_tolerance = std::nan("");
   EXPECT_THROW(align_coarse(c.source, c.target, p), InvalidInput);
   p = CoarseParams{};
@@ -626,7 +617,10 @@ TEST(Alignment, BadParametersThrow) {
   EXPECT_THROW(align_coarse(c.source, c.target, p), InvalidInput);
   for (auto bad : {+[](CoarseParams& q) { q.backward_weight = -1; }, +[](CoarseParams& q) { q.backward_misfit = -1; },
                    +[](CoarseParams& q) { q.backward_all_misfit = -1; },
-                   +[](CoarseParams& q) { q.backward_samples_per_node = 0; }}) {
+                   +[](CoarseParams& q) { q.backward_samples_per_node = 0; },
+                   +[](CoarseParams& q) { q.alpha_reg_start_after_pass = -1; },
+                   +[](CoarseParams& q) { q.alpha_reg_start_without_pass = std::nan(""); },
+                   +[](CoarseParams& q) { q.dense_spacing_factor = -1; }, +[](CoarseParams& q) { q.dense_alpha_reg = 0; }}) {
     p = CoarseParams{};
     bad(p);
     EXPECT_THROW(align_coarse(c.source, c.target, p), InvalidInput);
@@ -666,28 +660,38 @@ TEST(Alignment, SeparablePcgMatchesDirectSolve) {
     EXPECT_LT((c1.source.positions()[i] - c2.source.positions()[i]).norm(), 1e-4 * diag);
 }
 
-// CoarseParams::alpha_reg_start_after_pass: the full graph's first round after the low-density pass, and only then.
-TEST(Alignment, FullGraphAfterThePassStartsAtItsAlphaReg) {
+// CoarseParams::alpha_reg_start_after_pass: the full graph's first round after the low-density pass, and only then;
+// alpha_reg_start_without_pass: where the misfit called for no pass, and only then.
+TEST(Alignment, FullGraphStartsAtTheAlphaRegOfWhetherThePassRan) {
   const Eigen::Matrix3d R = rotation(15, Vec3(1, 1, 0));
-  auto first_alpha = [&](double start_after_pass, bool pass) {
+  enum Pass { Runs, BelowItsMisfit, Off };
+  auto first_alpha = [&](double start_after_pass, double start_without_pass, Pass pass) {
     Case c = make_case([&](const Vec3& p) { return Vec3(R * p * 1.1); });
     CoarseParams q;
     q.check_fit_first = false;
     q.alpha_reg_start_after_pass = start_after_pass;
-    if (!pass) q.coarse_pass_misfit = 0;
+    q.alpha_reg_start_without_pass = start_without_pass;
+    if (pass == BelowItsMisfit) q.coarse_pass_misfit = 1e9;
+    if (pass == Off) q.coarse_pass_misfit = 0;
     const CoarseReport r = align_coarse(c.source, c.target, q);
-    EXPECT_EQ(r.coarse_pass_iterations > 0, pass);
+    EXPECT_EQ(r.coarse_pass_iterations > 0, pass == Runs);
     EXPECT_FALSE(r.rounds.empty());
     return r.rounds.empty() ? 0.0 : r.rounds.front().alpha_reg;
   };
-  EXPECT_EQ(first_alpha(0, true), 1000);   // the paper's start
-  EXPECT_EQ(first_alpha(10, true), 10);
-  EXPECT_EQ(first_alpha(10, false), 1000);  // no pass: the paper's schedule
+  EXPECT_EQ(first_alpha(0, 0, Runs), 1000);  // the paper's start
+  EXPECT_EQ(first_alpha(10, 0, Runs), 10);
+  EXPECT_EQ(first_alpha(10, 0, Off), 1000);  // no pass: the paper's schedule
+  EXPECT_EQ(first_alpha(10, 0, BelowItsMisfit), 1000);
+  EXPECT_EQ(first_alpha(10, 30, BelowItsMisfit), 30);
+  EXPECT_EQ(first_alpha(10, 30, Runs), 10);
+  EXPECT_EQ(first_alpha(0, 30, Off), 1000);  // the pass switched off: no misfit called for none
   // `align` sets it, with the lower end of the schedule.
   CoarseParams q;
   FineParams f;
   use_large_motion_alignment(q, f);
   EXPECT_EQ(q.alpha_reg_start_after_pass, kLargeMotionAlphaRegStartAfterPass);
+  EXPECT_EQ(q.alpha_reg_start_without_pass, kLargeMotionAlphaRegStartWithoutPass);
+  EXPECT_EQ(CoarseParams{}.alpha_reg_start_without_pass, 0);  // the library's (and the tracker's): the paper's 1000
   EXPECT_EQ(q.alpha_reg_min, kLargeMotionAlphaRegMin);
   EXPECT_EQ(q.fit_tolerance, kLargeMotionFitTolerance);
   EXPECT_EQ(q.check_fit_first_tolerance, kLargeMotionCheckFitFirstTolerance);
