@@ -579,49 +579,29 @@ TEST(Alignment, GraphDensityPreview) {
 
 TEST(Alignment, BadParametersThrow) {
   Case c = make_case([](const Vec3& p) { return p; });
-  CoarseParams p;
-  p.graph_density = 0;
-  EXPECT_THROW(align_coarse(c.source, c.target, p), InvalidInput);
-  FineParams f;
-  f.sigma = -1;
-  EXPECT_THROW(align_fine(c.source, c.target, f), InvalidInput);
-  f = FineParams{};
-  f.max_rounds = 0;
-  EXPECT_THROW(align_fine(c.source, c.target, f), InvalidInput);
-  f = FineParams{};
-  f.more_rounds_residual = std::nan("");
-  EXPECT_THROW(align_fine(c.source, c.target, f), InvalidInput);
-  p = CoarseParams{};
-  p.step_tolerance = -1;
-  EXPECT_THROW(align_coarse(c.source, c.target, p), InvalidInput);
-  p = CoarseParams{};
-  p.intrinsic_pass_max_iterations_per_level = 0;
-  EXPECT_THROW(align_coarse(c.source, c.target, p), InvalidInput);
-  p = CoarseParams{};
-  p.check_fit_first_tolerance = std::nan("");
-  EXPECT_THROW(align_coarse(c.source, c.target, p), InvalidInput);
-  p = CoarseParams{};
-  p.fit_tolerance = std::nan("");
-  EXPECT_THROW(align_coarse(c.source, c.target, p), InvalidInput);
-  p = CoarseParams{};
-  p.stall_ratio = -0.5;
-  EXPECT_THROW(align_coarse(c.source, c.target, p), InvalidInput);
-  p = CoarseParams{};
-  p.prealign_misfit = -1;
-  EXPECT_THROW(align_coarse(c.source, c.target, p), InvalidInput);
-  p = CoarseParams{};
-  p.prealign.trim_fraction = 0;  // checked even when the misfit does not call for the pre-alignment
-  EXPECT_THROW(align_coarse(c.source, c.target, p), InvalidInput);
-  p = CoarseParams{};
-  p.closest_point_levels = -1;
-  EXPECT_THROW(align_coarse(c.source, c.target, p), InvalidInput);
-  for (auto bad : {+[](CoarseParams& q) { q.backward_weight = -1; }, +[](CoarseParams& q) { q.backward_misfit = -1; },
-                   +[](CoarseParams& q) { q.backward_all_misfit = -1; },
-                   +[](CoarseParams& q) { q.backward_samples_per_node = 0; },
-                   +[](CoarseParams& q) { q.alpha_reg_start_after_pass = -1; },
-                   +[](CoarseParams& q) { q.alpha_reg_start_without_pass = std::nan(""); },
-                   +[](CoarseParams& q) { q.dense_spacing_factor = -1; }, +[](CoarseParams& q) { q.dense_alpha_reg = 0; }}) {
-    p = CoarseParams{};
+  using FineSetting = void (*)(FineParams&);
+  for (FineSetting bad : {+[](FineParams& q) { q.sigma = -1; }, +[](FineParams& q) { q.max_rounds = 0; },
+                          +[](FineParams& q) { q.more_rounds_residual = std::nan(""); }}) {
+    FineParams f;
+    bad(f);
+    EXPECT_THROW(align_fine(c.source, c.target, f), InvalidInput);
+  }
+  using CoarseSetting = void (*)(CoarseParams&);
+  for (CoarseSetting bad : {
+           +[](CoarseParams& q) { q.graph_density = 0; }, +[](CoarseParams& q) { q.step_tolerance = -1; },
+           +[](CoarseParams& q) { q.intrinsic_pass_max_iterations_per_level = 0; },
+           +[](CoarseParams& q) { q.check_fit_first_tolerance = std::nan(""); },
+           +[](CoarseParams& q) { q.fit_tolerance = std::nan(""); }, +[](CoarseParams& q) { q.stall_ratio = -0.5; },
+           +[](CoarseParams& q) { q.prealign_misfit = -1; },
+           // checked even when the misfit does not call for the pre-alignment
+           +[](CoarseParams& q) { q.prealign.trim_fraction = 0; },
+           +[](CoarseParams& q) { q.closest_point_levels = -1; }, +[](CoarseParams& q) { q.backward_weight = -1; },
+           +[](CoarseParams& q) { q.backward_misfit = -1; }, +[](CoarseParams& q) { q.backward_all_misfit = -1; },
+           +[](CoarseParams& q) { q.backward_samples_per_node = 0; },
+           +[](CoarseParams& q) { q.alpha_reg_start_after_pass = -1; },
+           +[](CoarseParams& q) { q.alpha_reg_start_without_pass = std::nan(""); },
+           +[](CoarseParams& q) { q.dense_spacing_factor = -1; }, +[](CoarseParams& q) { q.dense_alpha_reg = 0; }}) {
+    CoarseParams p;
     bad(p);
     EXPECT_THROW(align_coarse(c.source, c.target, p), InvalidInput);
   }
