@@ -88,6 +88,8 @@ std::vector<Binding> bindings(TrackerParams& p) {
       {"coarse.intrinsic_misplaced_spacings", &p.coarse_params.intrinsic.misplaced_spacings, 0, 1e6},
       {"coarse.dense_spacing_factor", &p.coarse_params.dense_spacing_factor, 0, 1e3},
       {"coarse.dense_alpha_reg", &p.coarse_params.dense_alpha_reg, 1e-12, inf},
+      {"coarse.min_nodes", &p.coarse_params.min_nodes, 0, 1e7},
+      {"coarse.min_node_spacing_factor", &p.coarse_params.min_node_spacing_factor, 1e-3, 1e3},
       // Speed between consecutive frames (our additions, kernels/registration/coarse.hpp).
       {"coarse.retract_rotations", &p.coarse_params.retract_rotations},
       {"coarse.check_fit_first", &p.coarse_params.check_fit_first},

@@ -526,14 +526,31 @@ std::optional<NodeGuide> intrinsic_stage(SurfaceMesh& mesh, const TargetSurface&
   return full;
 }
 
+// CoarseParams::min_nodes: the node spacing factor that gives a graph of at least min_nodes nodes at full density.
+double node_spacing_for(const SurfaceMesh& mesh, const CoarseParams& params) {
+  const double factor = params.node_spacing_factor;
+  if (params.min_nodes <= 0 || !(factor > params.min_node_spacing_factor)) return factor;
+  // A graph has about 0.67-0.76 nodes per (factor)^2 vertices (samba, pcow, the elephant): only a mesh that could
+  // have fewer than min_nodes is sampled (a second time, at a cost its few vertices make small).
+  if (double(mesh.n_vertices()) / (factor * factor) > 4.0 * params.min_nodes) return factor;
+  const double n = double(sample_graph_nodes(mesh, factor * mean_edge_length(mesh)).size());
+  if (n >= params.min_nodes) return factor;
+  return std::max(params.min_node_spacing_factor, factor * std::sqrt(n / params.min_nodes));
+}
+
 }  // namespace
 
 CoarseReport align_coarse(SurfaceMesh& mesh, const TargetSurface& target, const CoarseParams& params) {
   const auto t_total = Clock::now();
-  if (!(params.dense_spacing_factor >= 0) || !(params.dense_alpha_reg > 0))
+  if (!(params.dense_spacing_factor >= 0) || !(params.dense_alpha_reg > 0) || params.min_nodes < 0 ||
+      !(params.min_node_spacing_factor > 0))
     TT_THROW(InvalidInput, "align_coarse: invalid parameters");
-  CoarseReport rep = align_coarse_impl(mesh, target, params, nullptr);
-  if (!(params.dense_spacing_factor > 0) || rep.coarse_pass_iterations > 0 || rep.fitted_at_start || rep.iterations == 0)
+  if (mesh.n_vertices() == 0 || mesh.n_faces() == 0) TT_THROW(InvalidInput, "align_coarse: empty mesh");
+  CoarseParams sized = params;
+  sized.node_spacing_factor = node_spacing_for(mesh, params);
+  CoarseReport rep = align_coarse_impl(mesh, target, sized, nullptr);
+  if (!(params.dense_spacing_factor > 0) || !(params.dense_spacing_factor < sized.node_spacing_factor) ||
+      rep.coarse_pass_iterations > 0 || rep.fitted_at_start || rep.iterations == 0)
     return rep;
   // The denser graph (CoarseParams::dense_spacing_factor): one level on the mesh as the schedule left it, the paper's
   // normal rays and energy, none of the large-motion stages (the misfit called for none of them).

@@ -59,6 +59,13 @@ struct CoarseMatchRound {
 
 struct CoarseParams {
   double node_spacing_factor = 4;  //!< node spacing in mean edge lengths of the mesh (§4.2)
+  //! A graph of at least `min_nodes` nodes at full density (our addition; 0: the paper's spacing whatever the mesh's
+  //! size, the library's and the tracker's default): on a mesh of few vertices four mean edge lengths give too few
+  //! nodes for the shape's parts, so the spacing shrinks (the low-density pass's with it) to
+  //! node_spacing_factor * sqrt(nodes / min_nodes) mean edge lengths, never below `min_node_spacing_factor`.
+  //! `topotrack align` takes kLargeMotionMinNodes. CoarseReport::node_spacing reports the spacing used.
+  int min_nodes = 0;
+  double min_node_spacing_factor = 2.5;
   int k = 4;                       //!< nodes per vertex (§4.2)
   double alpha_point = 0.1;        //!< point-to-point weight (§4.2)
   double alpha_plane = 1;          //!< point-to-plane weight (§4.2)
@@ -252,6 +259,12 @@ inline constexpr double kLargeMotionCheckFitFirstTolerance = 0.05;  // the libra
 //! not: after the pass the elephant 1.08 -> 1.05 and pcow 3.46 -> 3.36 for 0.6 s more at 42k vertices (over issue 4's
 //! time at 98k). Cost: bench/registration size 4 (samba re-meshed to 98k) 2.72 -> 4.0-4.5 s (the level 1.2-1.3 s).
 inline constexpr double kLargeMotionDenseSpacingFactor = 2.5;
+//! CoarseParams::min_nodes for `topotrack align`. Measured (docs/results.md 2026-12-02, % of the diagonal): pcow (2,904
+//! vertices, 137 nodes at the paper's spacing, 284 now) frame 1 -> 16 median over five re-samplings 3.46 -> 2.46 (250:
+//! 2.57, 350: 2.41), summed over frames k = 1, 3, 5, 7, 9 -> k+15 at two re-samplings 33.92 -> 27.59 (250: 27.26, 350:
+//! 28.35), distance to the target 0.052-0.103 -> 0.041-0.049; coarse 0.19 -> 0.25 s. Samba (415 nodes) and the
+//! elephant (2,003) are untouched.
+inline constexpr int kLargeMotionMinNodes = 300;
 //! CoarseParams::alpha_reg_start_without_pass for `topotrack align`. Measured (samba frame k -> k+15 without the pass, % of
 //! the diagonal; docs/results.md 2026-12-02): frame 1 median over five re-samplings 0.1191 either way in 19 rounds
 //! instead of 32, k = 3 / 5 / 7 0.1387 / 0.2239 / 0.2956 -> 0.1387 / 0.2250 / 0.2884 in 26 / 26 / 32 rounds instead of

@@ -5,7 +5,8 @@
 //! nodes (kLargeMotionIntrinsicPasses), the full graph's levels run from alpha_reg 10 down to 0.01 with or without
 //! the pass (kLargeMotionAlphaRegStartAfterPass, kLargeMotionAlphaRegStartWithoutPass, kLargeMotionAlphaRegMin,
 //! kLargeMotionFitTolerance and kLargeMotionCheckFitFirstTolerance), a pair within the normal rays' reach ends on a
-//! denser graph (kLargeMotionDenseSpacingFactor), and the fine stage takes
+//! denser graph (kLargeMotionDenseSpacingFactor), a mesh of few vertices gets a graph of enough nodes
+//! (kLargeMotionMinNodes), and the fine stage takes
 //! further rounds (kLargeMotionFineRounds). The rigid pre-alignment, the low-density pass and the backward matches are
 //! library defaults already, gated by the measured misfit. One place for the tool, the tests and the bench.
 #include "kernels/registration/coarse.hpp"
@@ -22,6 +23,7 @@ inline void use_large_motion_alignment(CoarseParams& coarse, FineParams& fine) {
   coarse.fit_tolerance = kLargeMotionFitTolerance;
   coarse.check_fit_first_tolerance = kLargeMotionCheckFitFirstTolerance;
   coarse.dense_spacing_factor = kLargeMotionDenseSpacingFactor;
+  coarse.min_nodes = kLargeMotionMinNodes;
   fine.max_rounds = kLargeMotionFineRounds;
 }
 

@@ -600,7 +600,8 @@ TEST(Alignment, BadParametersThrow) {
            +[](CoarseParams& q) { q.backward_samples_per_node = 0; },
            +[](CoarseParams& q) { q.alpha_reg_start_after_pass = -1; },
            +[](CoarseParams& q) { q.alpha_reg_start_without_pass = std::nan(""); },
-           +[](CoarseParams& q) { q.dense_spacing_factor = -1; }, +[](CoarseParams& q) { q.dense_alpha_reg = 0; }}) {
+           +[](CoarseParams& q) { q.dense_spacing_factor = -1; }, +[](CoarseParams& q) { q.dense_alpha_reg = 0; },
+           +[](CoarseParams& q) { q.min_nodes = -1; }, +[](CoarseParams& q) { q.min_node_spacing_factor = 0; }}) {
     CoarseParams p;
     bad(p);
     EXPECT_THROW(align_coarse(c.source, c.target, p), InvalidInput);
@@ -730,6 +731,56 @@ TEST(Alignment, DenseGraphEndsAPairWithoutThePass) {
   EXPECT_EQ(CoarseParams{}.dense_spacing_factor, 0);  // the library's (and the tracker's) default: none
 }
 
+// CoarseParams::min_nodes: a mesh whose paper spacing gives too few nodes gets a denser graph; others are untouched.
+TEST(Alignment, MinNodesGivesASmallMeshEnoughNodes) {
+  const Eigen::Matrix3d R = rotation(8, Vec3(1, 1, 0));
+  auto transform = [&](const Vec3& p) { return Vec3(R * Vec3(1.1 * p.x(), p.y(), 0.95 * p.z())); };
+  auto run = [&](int min_nodes, double floor = 2.5) {
+    Case c = make_case(transform);
+    const double edge = mean_edge_length(c.source);
+    CoarseParams q;
+    q.check_fit_first = false;
+    q.min_nodes = min_nodes;
+    q.min_node_spacing_factor = floor;
+    const CoarseReport r = align_coarse(c.source, c.target, q);
+    return std::tuple{r, r.node_spacing / edge, c.source.positions()};
+  };
+  const auto [paper, paper_factor, paper_out] = run(0);
+  EXPECT_NEAR(paper_factor, 4, 1e-9);
+  // The nodes the paper's spacing gives on the mesh as it comes (the full graph's, sampled after the low-density
+  // pass, may differ).
+  const SurfaceMesh rest = make_case(transform).source;
+  const int n = int(sample_graph_nodes(rest, 4 * mean_edge_length(rest)).size());
+  // No more than those: nothing changes, bit for bit.
+  const auto [same, same_factor, same_out] = run(n);
+  EXPECT_EQ(same.nodes, paper.nodes);
+  EXPECT_EQ(same.iterations, paper.iterations);
+  EXPECT_EQ(same_out, paper_out);
+  // Twice those: the spacing shrinks by sqrt(2), the graph grows.
+  const auto [denser, denser_factor, denser_out] = run(2 * n, 1);
+  EXPECT_NEAR(denser_factor, 4 / std::sqrt(2.0), 1e-9);
+  EXPECT_GT(denser.nodes, 3 * paper.nodes / 2);
+  // Never below the floor.
+  const auto [floored, floored_factor, floored_out] = run(100 * n);
+  EXPECT_NEAR(floored_factor, 2.5, 1e-9);
+  // A graph as dense as the denser graph's: that level does not run.
+  Case c = make_case(transform);
+  CoarseParams q;
+  q.check_fit_first = false;
+  q.coarse_pass_misfit = 0;
+  q.dense_spacing_factor = 2.5;
+  EXPECT_GT(align_coarse(c.source, c.target, q).dense.rounds, 0);
+  c = make_case(transform);
+  q.min_nodes = 100 * n;
+  EXPECT_EQ(align_coarse(c.source, c.target, q).dense.rounds, 0);
+  // `align` sets it; the library (and the tracker) do not.
+  q = CoarseParams{};
+  FineParams f;
+  use_large_motion_alignment(q, f);
+  EXPECT_EQ(q.min_nodes, kLargeMotionMinNodes);
+  EXPECT_EQ(CoarseParams{}.min_nodes, 0);
+}
+
 TEST(Alignment, OneAndTwoThreadsGiveIdenticalResults) {
   auto run = [](int threads) {
     tbb::task_arena arena(threads);
@@ -753,7 +804,9 @@ TEST(Alignment, OneAndTwoThreadsGiveIdenticalResults) {
       use_large_motion_alignment(q, f);
       q.intrinsic.misplaced_spacings = 0;
       q.check_fit_first = false;  // the first pass runs its rounds (else it may find itself fitted, with no graph)
+      const double e_edge = mean_edge_length(e.source);
       const CoarseReport er = align_coarse(e.source, e.target, q);
+      EXPECT_LT(er.node_spacing, 3 * e_edge);  // min_nodes: the blob's few vertices
       EXPECT_EQ(er.intrinsic_passes, 1);
       EXPECT_EQ(er.low_density.rounds, er.coarse_pass_iterations);
       EXPECT_GT(er.low_density.factorisations, 1);  // the first pass's and the guided pass's
@@ -762,6 +815,7 @@ TEST(Alignment, OneAndTwoThreadsGiveIdenticalResults) {
       const Eigen::Matrix3d R3 = rotation(8, Vec3(1, 1, 0));
       Case g = make_case([&](const Vec3& p) { return Vec3(R3 * p); });
       q.coarse_pass_misfit = 0;
+      q.min_nodes = 0;  // else the blob's graph is as dense as the denser graph's, which then does not run
       EXPECT_GT(align_coarse(g.source, g.target, q).dense.rounds, 0);
       out.insert(out.end(), g.source.positions().begin(), g.source.positions().end());
     });
