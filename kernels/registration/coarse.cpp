@@ -549,6 +549,7 @@ CoarseReport align_coarse(SurfaceMesh& mesh, const TargetSurface& target, const 
   CoarseParams sized = params;
   sized.node_spacing_factor = node_spacing_for(mesh, params);
   CoarseReport rep = align_coarse_impl(mesh, target, sized, nullptr);
+  rep.seconds_total = seconds_since(t_total);  // with min_nodes' sampling
   if (!(params.dense_spacing_factor > 0) || !(params.dense_spacing_factor < sized.node_spacing_factor) ||
       rep.coarse_pass_iterations > 0 || rep.fitted_at_start || rep.iterations == 0)
     return rep;
