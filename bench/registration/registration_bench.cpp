@@ -117,6 +117,9 @@ void override_params(CoarseParams& p) {
       else if (name == "max_pcg_iterations") p.max_pcg_iterations = int(v);
       else if (name == "coarse_pass_density") p.coarse_pass_density = v;
       else if (name == "coarse_pass_alpha_reg_min") p.coarse_pass_alpha_reg_min = v;
+      else if (name == "near_pass_density") p.near_pass_density = v;
+      else if (name == "near_pass_min_spacing") p.near_pass_min_spacing = v;
+      else if (name == "near_pass_max_iterations_per_level") p.near_pass_max_iterations_per_level = int(v);
       else if (name == "coarse_pass_misfit") p.coarse_pass_misfit = v;
       else if (name == "max_iterations_per_level_after_pass") p.max_iterations_per_level_after_pass = int(v);
       else if (name == "node_spacing_factor") p.node_spacing_factor = v;

@@ -526,6 +526,17 @@ std::optional<NodeGuide> intrinsic_stage(SurfaceMesh& mesh, const TargetSurface&
   return full;
 }
 
+// The low-density pass's share of the full graph's density where the misfit is small: CoarseParams::near_pass_density,
+// its spacing held at near_pass_min_spacing of the diagonal at least (`edge`: the mesh's mean edge length in diagonals).
+double near_pass_density(const CoarseParams& params, double edge) {
+  double density = params.near_pass_density;
+  if (params.near_pass_min_spacing > 0) {
+    const double widest = params.node_spacing_factor * edge / std::sqrt(params.graph_density) / params.near_pass_min_spacing;
+    density = std::min(density, widest * widest);
+  }
+  return std::max(density, params.coarse_pass_density);
+}
+
 // CoarseParams::min_nodes: the node spacing factor that gives a graph of at least min_nodes nodes at full density.
 double node_spacing_for(const SurfaceMesh& mesh, const CoarseParams& params) {
   const double factor = params.node_spacing_factor;
@@ -589,7 +600,9 @@ CoarseReport align_coarse_impl(SurfaceMesh& mesh, const TargetSurface& target, c
       !(params.alpha_reg_start_after_pass >= 0) || !(params.alpha_reg_start_without_pass >= 0) ||
       !(params.check_fit_first_tolerance >= 0) ||
       !(params.coarse_pass_misfit >= 0) || !(params.coarse_pass_density > 0) || params.coarse_pass_density > 1 ||
-      !(params.coarse_pass_alpha_reg_min > 0) || !(params.backward_weight >= 0) || !(params.backward_misfit >= 0) ||
+      !(params.coarse_pass_alpha_reg_min > 0) || !(params.near_pass_density >= 0) || params.near_pass_density > 1 ||
+      !(params.near_pass_misfit >= 0) || !(params.near_pass_min_spacing >= 0) ||
+      params.near_pass_max_iterations_per_level < 1 || !(params.backward_weight >= 0) || !(params.backward_misfit >= 0) ||
       !(params.backward_all_misfit >= 0) || params.intrinsic_passes < 0 || params.intrinsic_pass_max_iterations_per_level < 1 ||
       params.backward_samples_per_node < 1)
     TT_THROW(InvalidInput, "align_coarse: invalid parameters");
@@ -625,7 +638,10 @@ CoarseReport align_coarse_impl(SurfaceMesh& mesh, const TargetSurface& target, c
     }
     if (pass_runs) {
       CoarseParams pass = params;
-      pass.graph_density = params.graph_density * params.coarse_pass_density;
+      const bool near = params.near_pass_density > 0 && rep.misfit_start < params.near_pass_misfit;
+      pass.graph_density = params.graph_density * (near ? near_pass_density(params, edge / target.bbox_diagonal())
+                                                         : params.coarse_pass_density);
+      if (near) pass.max_iterations_per_level = params.near_pass_max_iterations_per_level;
       pass.alpha_reg_min = params.coarse_pass_alpha_reg_min;
       pass.prealign_misfit = 0;
       pass.coarse_pass_misfit = 0;

@@ -165,6 +165,19 @@ struct CoarseParams {
   double coarse_pass_misfit = 0.004;
   double coarse_pass_density = 0.25;
   double coarse_pass_alpha_reg_min = 0.1;
+  //! The low-density pass's density where the misfit is below `near_pass_misfit` (our addition; 0: coarse_pass_density
+  //! at any misfit, the library's and the tracker's default). A pair that needs the pass but not every node's backward
+  //! matches (backward_all_misfit's 3 %) has moved within a few of its node spacings: a quarter-density graph is coarser
+  //! than its motion needs, and what it leaves misplaced the full graph's rays do not bring back. `topotrack align`
+  //! takes kLargeMotionNearPassDensity. The pass's nodes stay at least `near_pass_min_spacing` (a fraction of the target's
+  //! bounding-box diagonal) apart, never sparser than coarse_pass_density: on a finer mesh of the same shape the pass
+  //! then has about as many nodes (their cost grows with their number, and the motion to fit is the same).
+  double near_pass_density = 0;
+  double near_pass_misfit = 0.03;
+  double near_pass_min_spacing = 0.025;
+  //! ... and at most this many rounds per alpha_reg level (max_iterations_per_level's 8 otherwise): more nodes, fewer
+  //! rounds for about the quarter's time.
+  int near_pass_max_iterations_per_level = 6;
   //! Cap on rounds per alpha_reg level of the full graph after the low-density pass ran (see above).
   //! 8 instead of 3 (measured 2026-11-23): frame k -> k+15 from k = 1, 3, 5, 7, 9
   //! (tests/kernels/registration/real_data_test.cpp), summed error pcow 15.75% -> 14.77%, elephant 18.84% ->
@@ -265,6 +278,17 @@ inline constexpr double kLargeMotionDenseSpacingFactor = 2.5;
 //! 28.35), distance to the target 0.052-0.103 -> 0.041-0.049; coarse 0.19 -> 0.25 s. Samba (415 nodes) and the
 //! elephant (2,003) are untouched.
 inline constexpr int kLargeMotionMinNodes = 300;
+//! CoarseParams::near_pass_density for `topotrack align`: the pass's nodes 1.5 times the full graph's spacing apart instead
+//! of twice, 6 rounds per level. Measured (docs/results.md 2026-12-02, % of the diagonal): the elephant (misfit 0.5-0.9 %)
+//! frame 1 -> 16 median over five re-samplings of the target 1.08 -> 0.90, frame k -> k+15 summed over k = 1, 3, 5, 7, 9
+//! at two re-samplings 9.81 -> 8.67 (8 rounds per level: 8.82, 5: 8.74; density 0.36 / 0.5 / 0.5625 with 8: 8.81 / 8.86 /
+//! 9.35); samba k = 9 (misfit 0.49 %, the one samba pair of these that runs the pass) 0.538 / 0.551 -> 0.431 / 0.457. pcow
+//! (misfit 3.9-6.6 %, above near_pass_misfit) is worse with it, 27.59 -> 32.36 at 4/9, and keeps the quarter.
+//! near_pass_min_spacing's 2.5 % of the diagonal leaves these elephant pairs (42k vertices; frame 1: 870 pass nodes instead
+//! of 500) at 4/9 (2.65 % thins the pass of some: 9.75) and the bench's 98k re-meshing near the quarter (1,131 nodes; 1,692
+//! at 4/9 took its pass from 1.2 to 2.5 s, the pair over issue 4's 4 s). bench/registration gap 15, two runs alternating:
+//! 47k 1.74 / 1.85 -> 2.02 / 1.91 s, 98k 3.38 / 3.17 -> 3.62 / 3.62 s.
+inline constexpr double kLargeMotionNearPassDensity = 4.0 / 9.0;
 //! CoarseParams::alpha_reg_start_without_pass for `topotrack align`. Measured (samba frame k -> k+15 without the pass, % of
 //! the diagonal; docs/results.md 2026-12-02): frame 1 median over five re-samplings 0.1191 either way in 19 rounds
 //! instead of 32, k = 3 / 5 / 7 0.1387 / 0.2239 / 0.2956 -> 0.1387 / 0.2250 / 0.2884 in 26 / 26 / 32 rounds instead of

@@ -2,7 +2,8 @@
 //! What `topotrack align` adds to the library's defaults for a pair far apart (our additions; the tracker,
 //! between consecutive frames, keeps the defaults): the full graph's misplaced nodes follow their intrinsic
 //! places (CoarseParams::intrinsic_full_graph) after one low-density pass guided by the pass's own misplaced
-//! nodes (kLargeMotionIntrinsicPasses), the full graph's levels run from alpha_reg 10 down to 0.01 with or without
+//! nodes (kLargeMotionIntrinsicPasses) on a graph less coarse where the misfit is small (kLargeMotionNearPassDensity),
+//! the full graph's levels run from alpha_reg 10 down to 0.01 with or without
 //! the pass (kLargeMotionAlphaRegStartAfterPass, kLargeMotionAlphaRegStartWithoutPass, kLargeMotionAlphaRegMin,
 //! kLargeMotionFitTolerance and kLargeMotionCheckFitFirstTolerance), a pair within the normal rays' reach ends on a
 //! denser graph (kLargeMotionDenseSpacingFactor), a mesh of few vertices gets a graph of enough nodes
@@ -17,6 +18,7 @@ namespace topotrack {
 inline void use_large_motion_alignment(CoarseParams& coarse, FineParams& fine) {
   coarse.intrinsic_full_graph = true;
   coarse.intrinsic_passes = kLargeMotionIntrinsicPasses;
+  coarse.near_pass_density = kLargeMotionNearPassDensity;
   coarse.alpha_reg_start_after_pass = kLargeMotionAlphaRegStartAfterPass;
   coarse.alpha_reg_start_without_pass = kLargeMotionAlphaRegStartWithoutPass;
   coarse.alpha_reg_min = kLargeMotionAlphaRegMin;

@@ -601,7 +601,10 @@ TEST(Alignment, BadParametersThrow) {
            +[](CoarseParams& q) { q.alpha_reg_start_after_pass = -1; },
            +[](CoarseParams& q) { q.alpha_reg_start_without_pass = std::nan(""); },
            +[](CoarseParams& q) { q.dense_spacing_factor = -1; }, +[](CoarseParams& q) { q.dense_alpha_reg = 0; },
-           +[](CoarseParams& q) { q.min_nodes = -1; }, +[](CoarseParams& q) { q.min_node_spacing_factor = 0; }}) {
+           +[](CoarseParams& q) { q.min_nodes = -1; }, +[](CoarseParams& q) { q.min_node_spacing_factor = 0; },
+           +[](CoarseParams& q) { q.near_pass_density = 1.5; }, +[](CoarseParams& q) { q.near_pass_density = std::nan(""); },
+           +[](CoarseParams& q) { q.near_pass_misfit = -1; }, +[](CoarseParams& q) { q.near_pass_min_spacing = -1; },
+           +[](CoarseParams& q) { q.near_pass_max_iterations_per_level = 0; }}) {
     CoarseParams p;
     bad(p);
     EXPECT_THROW(align_coarse(c.source, c.target, p), InvalidInput);
@@ -676,6 +679,46 @@ TEST(Alignment, FullGraphStartsAtTheAlphaRegOfWhetherThePassRan) {
   EXPECT_EQ(q.alpha_reg_min, kLargeMotionAlphaRegMin);
   EXPECT_EQ(q.fit_tolerance, kLargeMotionFitTolerance);
   EXPECT_EQ(q.check_fit_first_tolerance, kLargeMotionCheckFitFirstTolerance);
+}
+
+// CoarseParams::near_pass_density: the low-density pass's graph where the misfit is below near_pass_misfit, and only there.
+TEST(Alignment, NearPassDensityWhereTheMisfitIsSmall) {
+  const Eigen::Matrix3d R = rotation(15, Vec3(1, 1, 0));
+  int quarter_nodes = 1 << 30;
+  auto pass_nodes = [&](double near_density, double near_misfit, double min_spacing = 0) {
+    Case c = make_case([&](const Vec3& p) { return Vec3(R * p * 1.1); });
+    CoarseParams q;
+    q.check_fit_first = false;
+    q.near_pass_density = near_density;
+    q.near_pass_misfit = near_misfit;
+    q.near_pass_min_spacing = min_spacing;
+    const CoarseReport r = align_coarse(c.source, c.target, q);
+    EXPECT_GT(r.coarse_pass_iterations, 0);
+    EXPECT_GT(r.misfit_start, 0.004);
+    EXPECT_LT(r.misfit_start, 0.5);
+    // near_pass_max_iterations_per_level on the near pass's five levels (1000 to 0.1), max_iterations_per_level's 8 otherwise
+    if (r.low_density.nodes > quarter_nodes) EXPECT_LE(r.low_density.rounds, 5 * q.near_pass_max_iterations_per_level);
+    return r.low_density.nodes;
+  };
+  const int quarter = quarter_nodes = pass_nodes(0, 0.5);  // the library's default: a quarter at any misfit
+  const int near = pass_nodes(kLargeMotionNearPassDensity, 0.5);
+  EXPECT_GT(quarter, 0);
+  // 4/9 of the full graph's density instead of 1/4: about 1.8 times the nodes
+  EXPECT_GT(near, 1.4 * quarter);
+  EXPECT_LT(near, 2.4 * quarter);
+  EXPECT_EQ(pass_nodes(kLargeMotionNearPassDensity, 0.004), quarter);  // the misfit above near_pass_misfit
+  EXPECT_EQ(pass_nodes(kLargeMotionNearPassDensity, 0.5, 1.0), quarter);  // a spacing floor never sparser than the quarter
+  // A floor between the near pass's spacing (1.5 full-graph spacings) and the quarter's (2): a density between theirs.
+  Case c = make_case([&](const Vec3& p) { return Vec3(R * p * 1.1); });
+  const double full_spacing = align_coarse(c.source, c.target, CoarseParams{}).node_spacing / c.target.bbox_diagonal();
+  const int between = pass_nodes(kLargeMotionNearPassDensity, 0.5, 1.75 * full_spacing);
+  EXPECT_LT(between, near);
+  EXPECT_GT(between, quarter);
+  CoarseParams q;
+  FineParams f;
+  use_large_motion_alignment(q, f);
+  EXPECT_EQ(q.near_pass_density, kLargeMotionNearPassDensity);
+  EXPECT_EQ(CoarseParams{}.near_pass_density, 0);
 }
 
 // CoarseParams::dense_spacing_factor: one level on a denser graph where the low-density pass did not run, and only there.
