@@ -130,8 +130,88 @@ double node_fit_energy(const Vec3& x, const NodeMatches& m, std::size_t j, const
   return f;
 }
 
+// CoarseParams::vertex_fit_weight: the fitting term at the mesh's vertices too. Vertex v (rest x_v) is skinned by its
+// nodes t as sum_t w_t (A_t (x_v - g_t) + g_t + b_t), linear in node t's unknowns (a1, a2, a3, b) with coefficients
+// w_t u_t, u_t = (x_v - g_t, 1): the Gauss–Newton block of nodes t, s is w_t w_s (u_t u_s^T) (x) W_v, W_v the 3 x 3
+// weight of v's match, and every pair of nodes that share a vertex is a graph edge (deformation_graph.cpp).
+struct VertexFit {
+  std::vector<Vertex> vertex;           // the vertices fitted
+  std::vector<Index> node_offset;       // node j's entries: [node_offset[j], node_offset[j + 1])
+  std::vector<Index> entry_sample;      // per entry: the vertex (index into `vertex`)
+  std::vector<double> entry_weight;     // its skinning weight by the node
+  std::vector<Vec3> entry_offset;       // x_v - g_j
+  std::vector<Vec3> slot_offset;        // per vertex and influence slot t (k per vertex): x_v - g_t
+  std::vector<Correspondence> match;    // per vertex, this round (invalid: no term)
+  std::vector<Vec3> x;                  // per vertex, skinned by the current state
+  double weight = 0;                    // of a vertex's term relative to a node's
+  bool empty() const { return vertex.empty(); }
+};
+
+// The vertices fitted: every vertex (spacing 0), or vertices sampled `spacing` apart like the nodes.
+VertexFit build_vertex_fit(const Problem& p, double weight, double spacing) {
+  VertexFit f;
+  const DeformationGraph& g = p.graph;
+  const auto K = std::size_t(g.k);
+  const std::size_t nn = g.n_nodes();
+  const auto influenced = [&](Vertex v) { return std::size_t(v.idx) * K < g.influence_node.size() && g.influence_node[v.idx * K] != kInvalidIndex; };
+  if (spacing > 0) {
+    for (Vertex v : sample_graph_nodes(p.mesh, spacing))
+      if (influenced(v)) f.vertex.push_back(v);
+  } else {
+    for (std::size_t v = 0; v < p.mesh.vertices_size(); ++v)
+      if (!p.mesh.is_deleted(Vertex(Index(v))) && influenced(Vertex(Index(v)))) f.vertex.push_back(Vertex(Index(v)));
+  }
+  if (f.vertex.empty()) return f;
+  f.weight = weight * double(nn) / double(f.vertex.size());
+  f.node_offset.assign(nn + 1, 0);
+  for (Vertex v : f.vertex)
+    for (std::size_t t = 0; t < K; ++t)
+      if (const Index j = g.influence_node[v.idx * K + t]; j != kInvalidIndex) ++f.node_offset[j + 1];
+  for (std::size_t j = 0; j < nn; ++j) f.node_offset[j + 1] += f.node_offset[j];
+  const std::size_t ne = std::size_t(f.node_offset[nn]);
+  f.entry_sample.resize(ne);
+  f.entry_weight.resize(ne);
+  f.entry_offset.resize(ne);
+  f.slot_offset.assign(f.vertex.size() * K, Vec3::Zero());
+  std::vector<Index> fill(f.node_offset.begin(), f.node_offset.end() - 1);
+  for (std::size_t q = 0; q < f.vertex.size(); ++q) {
+    const Index v = f.vertex[q].idx;
+    for (std::size_t t = 0; t < K; ++t) {
+      const Index j = g.influence_node[v * K + t];
+      if (j == kInvalidIndex) continue;
+      f.slot_offset[q * K + t] = p.rest[v] - g.node_position[j];
+      const Index e = fill[j]++;
+      f.entry_sample[e] = Index(q);
+      f.entry_weight[e] = g.influence_weight[v * K + t];
+      f.entry_offset[e] = p.rest[v] - g.node_position[j];
+    }
+  }
+  return f;
+}
+
+Mat3 fit_matrix(const Correspondence& c, const Weights& w, double scale) {
+  return scale * (w.fit_point * Mat3::Identity() + w.fit_plane * c.normal * c.normal.transpose());
+}
+
+// The vertices' fit energy for the state `s` (their skinned positions in `x`); summed in vertex order.
+double vertex_fit_energy(const Problem& p, const std::vector<NodeState>& s, const VertexFit& f, const Weights& w,
+                         std::vector<Vec3>& x, std::vector<double>& e) {
+  const std::size_t n = f.vertex.size();
+  x.resize(n);
+  e.resize(n);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 1024), [&](const auto& r) {
+    for (std::size_t q = r.begin(); q != r.end(); ++q) {
+      x[q] = skin(p, s, f.vertex[q].idx);
+      e[q] = fit_energy(x[q], f.match[q], w);
+    }
+  });
+  double sum = 0;
+  for (const double v : e) sum += v;
+  return f.weight * sum;
+}
+
 Energy evaluate_energy(const Problem& p, const std::vector<NodeState>& s, const NodeMatches& corr,
-                       const Weights& w, double fit_scale) {
+                       const Weights& w, double fit_scale, const VertexFit* vertices = nullptr) {
   const DeformationGraph& g = p.graph;
   const std::size_t nn = g.n_nodes();
   std::vector<double> total(nn), fit(nn);
@@ -153,6 +233,11 @@ Energy evaluate_energy(const Problem& p, const std::vector<NodeState>& s, const 
   for (std::size_t j = 0; j < nn; ++j) {
     out.total += total[j];
     out.fit += fit[j];
+  }
+  if (vertices && !vertices->empty()) {
+    std::vector<Vec3> x;
+    std::vector<double> e;
+    out.total += vertex_fit_energy(p, s, *vertices, w, x, e);
   }
   return out;
 }
@@ -216,15 +301,33 @@ Eigen::Matrix4d coordinate_average(const Mat12& M) {
 struct NodeSystem {
   std::vector<Mat12> diag, diag_inverse;
   double smooth = 0;
+  // With a vertex fit (VertexFit), the coupling of the nodes sharing a vertex: applied through the vertex, the
+  // product of its row of the skinning with x in `vertex_product` (scratch).
+  const VertexFit* vertices = nullptr;
+  std::vector<Mat3> vertex_matrix;  // per vertex: its W_v (zero: no match)
+  mutable std::vector<Vec3> vertex_product;
 };
 
 // Fill the gradient g = J^T r and either the lower triangle of H (`full`, the direct path) or the node
 // blocks with the per-coordinate matrix (`nodes`, `precond`: the PCG path) for the current state; each
 // node writes its own columns and entries, so the result does not depend on the scheduling.
-void assemble(const Problem& p, const std::vector<NodeState>& s, const NodeMatches& corr,
+void assemble(const Problem& p, const std::vector<NodeState>& s, const NodeMatches& corr, const VertexFit* vertices,
               const Weights& w, SystemPattern* full, SystemPattern* precond, NodeSystem* nodes, Eigen::VectorXd& grad) {
   const DeformationGraph& g = p.graph;
   const std::size_t nn = g.n_nodes();
+  const auto K = std::size_t(g.k);
+  if (vertices && vertices->empty()) vertices = nullptr;
+  // Each vertex's fit weight W_v and residual W_v (x_v - c_v) (x_v: VertexFit::x, skinned by `s`).
+  std::vector<Mat3> vertex_matrix(vertices ? vertices->vertex.size() : 0, Mat3::Zero());
+  std::vector<Vec3> vertex_residual(vertex_matrix.size(), Vec3::Zero());
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, vertex_matrix.size(), 1024), [&](const auto& r) {
+    for (std::size_t q = r.begin(); q != r.end(); ++q) {
+      const Correspondence& c = vertices->match[q];
+      if (!c.valid()) continue;
+      vertex_matrix[q] = fit_matrix(c, w, vertices->weight);
+      vertex_residual[q] = vertex_matrix[q] * (vertices->x[q] - c.point);
+    }
+  });
   grad.setZero(Eigen::Index(12 * nn));
   double* values = full ? full->H.valuePtr() : nullptr;
   const int* outer = full ? full->H.outerIndexPtr() : nullptr;
@@ -235,6 +338,11 @@ void assemble(const Problem& p, const std::vector<NodeState>& s, const NodeMatch
     nodes->diag_inverse.resize(nn);
     nodes->smooth = w.smooth;
   }
+  if (nodes) {
+    nodes->vertices = vertices;
+    nodes->vertex_matrix = std::move(vertex_matrix);
+  }
+  const std::vector<Mat3>& vertex_w = nodes ? nodes->vertex_matrix : vertex_matrix;
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nn, 32), [&](const auto& range) {
     for (std::size_t j = range.begin(); j != range.end(); ++j) {
       Mat12 D = Mat12::Zero();
@@ -272,6 +380,18 @@ void assemble(const Problem& p, const std::vector<NodeState>& s, const NodeMatch
       };
       add_fit(corr.forward[j], 1);
       if (!corr.backward.empty()) add_fit(corr.backward[j], w.backward);
+      // E_fit at the vertices node j skins (VertexFit): J = w_j u^T (x) I over (a1, a2, a3, b).
+      if (vertices)
+        for (Index e = vertices->node_offset[j]; e < vertices->node_offset[j + 1]; ++e) {
+          const std::size_t q = vertices->entry_sample[e];
+          if (!vertices->match[q].valid()) continue;
+          const double wt = vertices->entry_weight[e];
+          const Eigen::Vector4d u(vertices->entry_offset[e].x(), vertices->entry_offset[e].y(), vertices->entry_offset[e].z(), 1);
+          for (int m = 0; m < 4; ++m) {
+            gj.segment<3>(3 * m) += wt * u[m] * vertex_residual[q];
+            for (int c = 0; c < 4; ++c) D.block<3, 3>(3 * m, 3 * c) += (wt * wt * u[m] * u[c]) * vertex_w[q];
+          }
+        }
       // E_smooth over both directed edges j->k and k->j.
       for (Index q = g.neighbor_offset[j]; q < g.neighbor_offset[j + 1]; ++q) {
         const Index k = g.neighbors[q];
@@ -314,13 +434,35 @@ void assemble(const Problem& p, const std::vector<NodeState>& s, const NodeMatch
         }
       }
       if (!values && !precond) continue;
-      // Off-diagonal blocks H_kj (rows: unknowns of k > j, columns: unknowns of j).
+      // Off-diagonal blocks H_kj (rows: unknowns of k > j, columns: unknowns of j), m-th of j's neighbours k > j.
+      const Index first_upper = Index(std::upper_bound(g.neighbors.begin() + g.neighbor_offset[j],
+                                                       g.neighbors.begin() + g.neighbor_offset[j + 1], Index(j)) -
+                                      g.neighbors.begin());
+      std::vector<Mat12> upper(std::size_t(g.neighbor_offset[j + 1] - first_upper), Mat12::Zero());
+      if (vertices)  // the vertices node j skins with a node k > j: w_k w_j (u_k u_j^T) (x) W_v
+        for (Index e = vertices->node_offset[j]; e < vertices->node_offset[j + 1]; ++e) {
+          const std::size_t q = vertices->entry_sample[e];
+          if (!vertices->match[q].valid()) continue;
+          const Index v = vertices->vertex[q].idx;
+          const double wj = vertices->entry_weight[e];
+          const Eigen::Vector4d uj(vertices->entry_offset[e].x(), vertices->entry_offset[e].y(), vertices->entry_offset[e].z(), 1);
+          for (std::size_t t = 0; t < K; ++t) {
+            const Index k = g.influence_node[v * K + t];
+            if (k == kInvalidIndex || k <= Index(j)) continue;
+            const auto at = std::lower_bound(g.neighbors.begin() + first_upper, g.neighbors.begin() + g.neighbor_offset[j + 1], k);
+            const Vec3& xk = vertices->slot_offset[q * K + t];
+            const Eigen::Vector4d uk(xk.x(), xk.y(), xk.z(), 1);
+            const double wk = g.influence_weight[v * K + t];
+            Mat12& B = upper[std::size_t(at - (g.neighbors.begin() + first_upper))];
+            for (int a = 0; a < 4; ++a)
+              for (int c = 0; c < 4; ++c) B.block<3, 3>(3 * a, 3 * c) += (wk * wj * uk[a] * uj[c]) * vertex_w[q];
+          }
+        }
       int m = 0;
-      for (Index q = g.neighbor_offset[j]; q < g.neighbor_offset[j + 1]; ++q) {
+      for (Index q = first_upper; q < g.neighbor_offset[j + 1]; ++q) {
         const Index k = g.neighbors[q];
-        if (k < j) continue;
         const Vec3 d = g.node_position[k] - gpos;
-        Mat12 B = Mat12::Zero();
+        Mat12& B = upper[std::size_t(m)];
         // j -> k: J_k = [0, 0, 0, -I], J_j = [d0 I, d1 I, d2 I, I]  =>  rows b_k.
         for (int c2 = 0; c2 < 4; ++c2) B.block<3, 3>(9, 3 * c2).diagonal().array() -= w.smooth * (c2 < 3 ? d[c2] : 1.0);
         // k -> j: J_k = [-d0 I, -d1 I, -d2 I, I] (its edge vector is -d), J_j = [0, 0, 0, -I]  =>  columns b_j.
@@ -348,9 +490,40 @@ void assemble(const Problem& p, const std::vector<NodeState>& s, const NodeMatch
 void apply_system(const DeformationGraph& g, const NodeSystem& sys, const Eigen::VectorXd& x, Eigen::VectorXd& y) {
   const std::size_t nn = g.n_nodes();
   y.resize(x.size());
+  // Node j's unknowns x_j applied to u: A u.head(3) + b (the 3 x 4 matrix [a1 a2 a3 b] times u).
+  const auto apply_node = [&x](std::size_t j, const Vec3& offset) {
+    const auto xj = x.segment<12>(Eigen::Index(12 * j));
+    return Vec3(offset.x() * xj.segment<3>(0) + offset.y() * xj.segment<3>(3) + offset.z() * xj.segment<3>(6) + xj.tail<3>());
+  };
+  const VertexFit* vf = sys.vertices;
+  if (vf) {  // each vertex's skinning row times x: sum_t w_t X_t u_t
+    const auto K = std::size_t(g.k);
+    sys.vertex_product.resize(vf->vertex.size());
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, vf->vertex.size(), 1024), [&](const auto& r) {
+      for (std::size_t q = r.begin(); q != r.end(); ++q) {
+        Vec3 sum = Vec3::Zero();
+        const Index v = vf->vertex[q].idx;
+        for (std::size_t t = 0; t < K; ++t)
+          if (const Index k = g.influence_node[v * K + t]; k != kInvalidIndex)
+            sum += g.influence_weight[v * K + t] * apply_node(std::size_t(k), vf->slot_offset[q * K + t]);
+        sys.vertex_product[q] = sum;
+      }
+    });
+  }
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nn, 128), [&](const auto& range) {
     for (std::size_t j = range.begin(); j != range.end(); ++j) {
       Vec12 yj = sys.diag[j] * x.segment<12>(Eigen::Index(12 * j));
+      if (vf)  // the other nodes' share of each vertex node j skins (its own is in diag[j])
+        for (Index e = vf->node_offset[j]; e < vf->node_offset[j + 1]; ++e) {
+          const std::size_t q = vf->entry_sample[e];
+          const Vec3 others = sys.vertex_product[q] - vf->entry_weight[e] * apply_node(j, vf->entry_offset[e]);
+          const Vec3 f = vf->entry_weight[e] * (sys.vertex_matrix[q] * others);
+          const Vec3& o = vf->entry_offset[e];
+          yj.segment<3>(0) += o.x() * f;
+          yj.segment<3>(3) += o.y() * f;
+          yj.segment<3>(6) += o.z() * f;
+          yj.tail<3>() += f;
+        }
       const Vec3& gj = g.node_position[j];
       for (Index q = g.neighbor_offset[j]; q < g.neighbor_offset[j + 1]; ++q) {
         const Index k = g.neighbors[q];
@@ -604,7 +777,8 @@ CoarseReport align_coarse_impl(SurfaceMesh& mesh, const TargetSurface& target, c
       !(params.near_pass_misfit >= 0) || !(params.near_pass_min_spacing >= 0) ||
       params.near_pass_max_iterations_per_level < 1 || !(params.backward_weight >= 0) || !(params.backward_misfit >= 0) ||
       !(params.backward_all_misfit >= 0) || params.intrinsic_passes < 0 || params.intrinsic_pass_max_iterations_per_level < 1 ||
-      params.backward_samples_per_node < 1)
+      params.backward_samples_per_node < 1 || !(params.vertex_fit_weight >= 0) || !(params.vertex_fit_spacing >= 0) ||
+      !(params.vertex_fit_max_disagreement >= 0))
     TT_THROW(InvalidInput, "align_coarse: invalid parameters");
   if (params.prealign_misfit > 0 || params.coarse_pass_misfit > 0) validate(params.prealign);
   if (mesh.n_vertices() == 0 || mesh.n_faces() == 0) TT_THROW(InvalidInput, "align_coarse: empty mesh");
@@ -651,6 +825,7 @@ CoarseReport align_coarse_impl(SurfaceMesh& mesh, const TargetSurface& target, c
       report_hooks_as(pass, params, CoarseStage::LowDensityLevel);
       pass.intrinsic_passes = 0;
       pass.intrinsic_full_graph = false;
+      pass.vertex_fit_weight = 0;  // (CoarseParams::vertex_fit_weight: the full graph's alone)
       std::shared_ptr<const DeformationGraph> pass_graph;
       const CoarseReport pr = align_coarse_impl(mesh, target, pass, nullptr, params.intrinsic_passes > 0 ? &pass_graph : nullptr);
       rep.coarse_pass_iterations = pr.iterations;
@@ -742,6 +917,8 @@ CoarseReport align_coarse_impl(SurfaceMesh& mesh, const TargetSurface& target, c
 
   std::vector<NodeState> state(nn), trial(nn);
   std::vector<Vec3> node_x(nn), node_n(nn);
+  VertexFit vertex_fit = params.vertex_fit_weight > 0 ? build_vertex_fit(problem, params.vertex_fit_weight, params.vertex_fit_spacing * spacing) : VertexFit{};
+  std::vector<Vec3> vertex_n(vertex_fit.vertex.size());
   std::vector<Correspondence> corr, back;
   const TargetSamples samples =
       backward ? sample_target(target, std::size_t(params.backward_samples_per_node) * nn) : TargetSamples{};
@@ -778,6 +955,51 @@ CoarseReport align_coarse_impl(SurfaceMesh& mesh, const TargetSurface& target, c
           corr[j].distance = (node_x[j] - corr[j].point).norm();
           if (backward) back[j] = Correspondence{};
         }
+    const bool fit_vertices = !vertex_fit.empty();
+    if (fit_vertices) {  // the vertices' matches along their skinned normals, like the nodes'
+      vertex_fit.x.resize(vertex_fit.vertex.size());
+      tbb::parallel_for(tbb::blocked_range<std::size_t>(0, vertex_fit.vertex.size(), 256), [&](const auto& r) {
+        std::vector<Halfedge> ring;
+        for (std::size_t q = r.begin(); q != r.end(); ++q) {
+          vertex_fit.x[q] = skin(problem, state, vertex_fit.vertex[q].idx);
+          vertex_n[q] = skinned_normal(problem, state, vertex_fit.vertex[q], ring);
+        }
+      });
+      vertex_fit.match = find_correspondences(target, vertex_fit.x, vertex_n, cparams);
+      if (params.match_override)
+        params.match_override(CoarseMatchRound{CoarseStage::Level, rep.levels, vertex_fit.vertex}, vertex_fit.match);
+      if (params.vertex_fit_max_disagreement > 0) {
+        // A vertex's match moves it about as its nodes' matches move them (skinning-weighted), or it is pruned: a ray
+        // from a part still far from its place may hit another part, and the vertices outnumber the nodes.
+        const auto K = std::size_t(graph.k);
+        const double limit = params.vertex_fit_max_disagreement * spacing;
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, vertex_fit.vertex.size(), 1024), [&](const auto& r) {
+          for (std::size_t q = r.begin(); q != r.end(); ++q) {
+            Correspondence& c = vertex_fit.match[q];
+            if (!c.valid()) continue;
+            const Index v = vertex_fit.vertex[q].idx;
+            Vec3 d = Vec3::Zero();
+            double wsum = 0;
+            for (std::size_t t = 0; t < K; ++t) {
+              const Index j = graph.influence_node[v * K + t];
+              if (j == kInvalidIndex || !corr[j].valid()) continue;
+              const double wt = graph.influence_weight[v * K + t];
+              d += wt * (corr[j].point - node_x[j]);
+              wsum += wt;
+            }
+            if (!(wsum > 0) || ((c.point - vertex_fit.x[q]) - d / wsum).norm() > limit) c = Correspondence{};
+          }
+        });
+      }
+      if (guide) {  // a vertex a guided node skins is left to the node's match
+        const auto K = std::size_t(graph.k);
+        for (std::size_t q = 0; q < vertex_fit.vertex.size(); ++q)
+          for (std::size_t t = 0; t < K; ++t)
+            if (const Index j = graph.influence_node[vertex_fit.vertex[q].idx * K + t];
+                j != kInvalidIndex && guide->match[j].valid())
+              vertex_fit.match[q] = Correspondence{};
+      }
+    }
     rep.seconds_correspondences += seconds_since(t0);
     const CorrespondenceCounts counts = count_correspondences(corr);
     rep.correspondences = counts.ok;
@@ -796,13 +1018,14 @@ CoarseReport align_coarse_impl(SurfaceMesh& mesh, const TargetSurface& target, c
                     params.backward_weight};
     const NodeMatches matches{corr, back};
     const double fit_scale = params.alpha_fit > 0 ? 1.0 / params.alpha_fit : 0.0;
-    const Energy before = evaluate_energy(problem, state, matches, w, fit_scale);
+    const VertexFit* vertices = fit_vertices ? &vertex_fit : nullptr;
+    const Energy before = evaluate_energy(problem, state, matches, w, fit_scale, vertices);
     if (first) {
       rep.energy_start = before.total;
       rep.fit_start = before.fit;
       first = false;
     }
-    assemble(problem, state, matches, w, direct ? &pattern : nullptr, direct ? nullptr : &precond,
+    assemble(problem, state, matches, vertices, w, direct ? &pattern : nullptr, direct ? nullptr : &precond,
              direct ? nullptr : &node_system, grad);
     rep.seconds_assembly += seconds_since(t0);
     if (direct || refactor || params.refactor_each_round) {
@@ -850,7 +1073,7 @@ CoarseReport align_coarse_impl(SurfaceMesh& mesh, const TargetSurface& target, c
         const Mat3 R = Eigen::AngleAxisd(t * angle, spin[j] / angle).toRotationMatrix();
         trial[j].A = R * state[j].A + t * (dA - W * state[j].A);
       }
-      const Energy e = evaluate_energy(problem, trial, matches, w, fit_scale);
+      const Energy e = evaluate_energy(problem, trial, matches, w, fit_scale, vertices);
       if (e.total <= before.total) {
         after = e;
         state.swap(trial);

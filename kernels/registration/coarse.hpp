@@ -241,6 +241,20 @@ struct CoarseParams {
   //! graph's nodes can. `topotrack align` takes kLargeMotionDenseSpacingFactor.
   double dense_spacing_factor = 0;
   double dense_alpha_reg = 0.01;
+  //! A fitting term at the mesh's vertices too (our addition; 0: the paper's, at the nodes only, the default and the
+  //! tracker's): vertices sampled `vertex_fit_spacing` node spacings apart (0: every vertex) are matched along their
+  //! skinned normals like the nodes (same pruning), each term weighted vertex_fit_weight * nodes / vertices relative to
+  //! a node's, so that the data, not the regularisation alone, sets each node's A_j (its rotation and shape): with the
+  //! nodes' matches alone the linear blend of a few nodes cannot follow a limb's bend between them. A vertex's match is
+  //! pruned where its displacement differs by more than `vertex_fit_max_disagreement` node spacings (0: no test) from
+  //! the skinning-weighted mean of its nodes' (or none of them has a match): a ray from a part still far from its place
+  //! may hit another part, and the vertices outnumber the nodes. A vertex skinned by a guided node (the intrinsic
+  //! stage's) is left to the node's match. The full graph and the denser graph fit their vertices; the low-density
+  //! passes do not. match_override is called for the vertices too (CoarseMatchRound::nodes: the vertices).
+  //! `topotrack align` takes kLargeMotionVertexFit*; measured there.
+  double vertex_fit_weight = 0;
+  double vertex_fit_spacing = 0;
+  double vertex_fit_max_disagreement = 0;
   //! Diagnostics: when set, called after the pre-alignment and after every alpha_reg level (then
   //! costs one skinning of the mesh per level); the result does not depend on it.
   std::function<void(const CoarseSnapshot&)> observer;
@@ -295,6 +309,17 @@ inline constexpr double kLargeMotionNearPassDensity = 4.0 / 9.0;
 //! 40; bench/registration size 4 (samba re-meshed to 98k, with the denser graph) 4.40-4.53 -> 3.47-3.67 s. Where the pass
 //! runs (pcow, the elephant) nothing changes.
 inline constexpr double kLargeMotionAlphaRegStartWithoutPass = 10;
+//! CoarseParams::vertex_fit_weight, vertex_fit_spacing, vertex_fit_max_disagreement for `topotrack align`. Measured (frame
+//! k -> k+15 summed over k = 1, 3, 5, 7, 9 at two re-samplings of the target, 0.79 and 0.81, % of the diagonal;
+//! docs/results.md 2026-12-03): samba 2.429 -> 1.664, elephant 8.667 -> 8.145, pcow 27.59 -> 26.48. Weight 3 / 30
+//! (spacing 0.5, no disagreement test): elephant 8.12 / 8.33, pcow 26.87 / 26.21; spacing 0.35 / 0.25: elephant 8.20 /
+//! 8.20 for more time; every vertex (weight 1): elephant frame 1 0.918 -> 0.848, twice the coarse time. Without the
+//! disagreement test samba frame 5 -> 20 lost a limb to another part with weight 1 and 10 (1.0-1.2 % instead of 0.23 %),
+//! and also when the vertices waited for alpha_reg 1 or 0.1; a test at 0.25 / 0.5 spacings: elephant 8.36 / 8.16, pcow
+//! 27.45 / 27.00. In the low-density passes too (0.5): samba 1.616, elephant 9.56, pcow 26.62.
+inline constexpr double kLargeMotionVertexFitWeight = 10;
+inline constexpr double kLargeMotionVertexFitSpacing = 0.5;
+inline constexpr double kLargeMotionVertexFitMaxDisagreement = 1;
 
 //! One correspondence + Gauss–Newton round.
 struct CoarseRound {

@@ -7,7 +7,7 @@
 //! the pass (kLargeMotionAlphaRegStartAfterPass, kLargeMotionAlphaRegStartWithoutPass, kLargeMotionAlphaRegMin,
 //! kLargeMotionFitTolerance and kLargeMotionCheckFitFirstTolerance), a pair within the normal rays' reach ends on a
 //! denser graph (kLargeMotionDenseSpacingFactor), a mesh of few vertices gets a graph of enough nodes
-//! (kLargeMotionMinNodes), and the fine stage takes
+//! (kLargeMotionMinNodes), the full graph also fits sampled vertices (kLargeMotionVertexFitWeight), and the fine stage takes
 //! further rounds (kLargeMotionFineRounds). The rigid pre-alignment, the low-density pass and the backward matches are
 //! library defaults already, gated by the measured misfit. One place for the tool, the tests and the bench.
 #include "kernels/registration/coarse.hpp"
@@ -26,6 +26,9 @@ inline void use_large_motion_alignment(CoarseParams& coarse, FineParams& fine) {
   coarse.check_fit_first_tolerance = kLargeMotionCheckFitFirstTolerance;
   coarse.dense_spacing_factor = kLargeMotionDenseSpacingFactor;
   coarse.min_nodes = kLargeMotionMinNodes;
+  coarse.vertex_fit_weight = kLargeMotionVertexFitWeight;
+  coarse.vertex_fit_spacing = kLargeMotionVertexFitSpacing;
+  coarse.vertex_fit_max_disagreement = kLargeMotionVertexFitMaxDisagreement;
   fine.max_rounds = kLargeMotionFineRounds;
 }
 

@@ -31,6 +31,8 @@ struct Figures {
 // TOPOTRACK_TEST_INTRINSIC=0|1, TOPOTRACK_TEST_INTRINSIC_PASSES=n (CoarseParams::intrinsic_full_graph,
 // intrinsic_passes), TOPOTRACK_TEST_INTRINSIC_ANCHORS=n, TOPOTRACK_TEST_INTRINSIC_MISPLACED=x, TOPOTRACK_TEST_FINE_ROUNDS=n, TOPOTRACK_TEST_FINE_MAX_ROUNDS=n, TOPOTRACK_TEST_FINE_MORE_RESIDUAL=x, TOPOTRACK_TEST_FINE_NORMAL_ANGLE=deg,
 // TOPOTRACK_TEST_FINE_NORMAL_DISPLACEMENT=0|1 (FineParams), TOPOTRACK_TEST_DENSE_SPACING=x (0: no denser graph),
+// TOPOTRACK_TEST_VERTEX_FIT=x (0: the nodes' fit alone), TOPOTRACK_TEST_VERTEX_FIT_SPACING=x, TOPOTRACK_TEST_VERTEX_FIT_DISAGREE=x
+// (CoarseParams::vertex_fit_weight, vertex_fit_spacing, vertex_fit_max_disagreement),
 // TOPOTRACK_TEST_DENSE_ALPHA=x (dense_spacing_factor, dense_alpha_reg), TOPOTRACK_TEST_ALPHA_START_WITHOUT_PASS=x,
 // TOPOTRACK_TEST_MIN_NODES=n (0: the paper's spacing on any mesh), TOPOTRACK_TEST_NEAR_PASS_DENSITY=x (0: a quarter at any misfit),
 // TOPOTRACK_TEST_NEAR_PASS_MIN_SPACING=x, TOPOTRACK_TEST_NEAR_PASS_PER_LEVEL=n, TOPOTRACK_TEST_TRUTH_STAGE=full|pass
@@ -92,6 +94,9 @@ Figures run_pair(const std::string& name, int frame, int gap, double edge_factor
   env_double("TOPOTRACK_TEST_ALPHA_POINT", params.alpha_point);
   env_double("TOPOTRACK_TEST_ALPHA_PLANE", params.alpha_plane);
   env_double("TOPOTRACK_TEST_ALPHA_REG_MIN", params.alpha_reg_min);
+  env_double("TOPOTRACK_TEST_VERTEX_FIT", params.vertex_fit_weight);
+  env_double("TOPOTRACK_TEST_VERTEX_FIT_SPACING", params.vertex_fit_spacing);
+  env_double("TOPOTRACK_TEST_VERTEX_FIT_DISAGREE", params.vertex_fit_max_disagreement);
   env_double("TOPOTRACK_TEST_DENSE_SPACING", params.dense_spacing_factor);
   env_double("TOPOTRACK_TEST_DENSE_ALPHA", params.dense_alpha_reg);
   env_int("TOPOTRACK_TEST_MIN_NODES", params.min_nodes);
