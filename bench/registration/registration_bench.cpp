@@ -130,6 +130,8 @@ void override_params(CoarseParams& p) {
       else if (name == "intrinsic_full_graph") p.intrinsic_full_graph = v != 0;
       else if (name == "dense_spacing_factor") p.dense_spacing_factor = v;
       else if (name == "min_nodes") p.min_nodes = int(v);
+      else if (name == "vertex_fit_weight") p.vertex_fit_weight = v;
+      else if (name == "vertex_fit_spacing") p.vertex_fit_spacing = v;
       else std::fprintf(stderr, "TOPOTRACK_BENCH_COARSE: unknown field %s\n", name.c_str());
     }
     at = end + 1;

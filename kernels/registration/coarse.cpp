@@ -919,6 +919,7 @@ CoarseReport align_coarse_impl(SurfaceMesh& mesh, const TargetSurface& target, c
   std::vector<Vec3> node_x(nn), node_n(nn);
   VertexFit vertex_fit = params.vertex_fit_weight > 0 ? build_vertex_fit(problem, params.vertex_fit_weight, params.vertex_fit_spacing * spacing) : VertexFit{};
   std::vector<Vec3> vertex_n(vertex_fit.vertex.size());
+  rep.fitted_vertices = int(vertex_fit.vertex.size());
   std::vector<Correspondence> corr, back;
   const TargetSamples samples =
       backward ? sample_target(target, std::size_t(params.backward_samples_per_node) * nn) : TargetSamples{};

@@ -348,6 +348,7 @@ struct CoarseReport {
   int levels = 0;             //!< alpha_reg levels visited
   int nodes = 0;
   int graph_edges = 0;
+  int fitted_vertices = 0;    //!< vertices with a fitting term of their own (CoarseParams::vertex_fit_weight)
   int factorisations = 0;
   std::size_t factor_nonzeros = 0;  //!< entries of the Cholesky factor L (the last factorisation)
   int pcg_iterations = 0;     //!< summed over rounds (SeparablePCG)

@@ -761,7 +761,9 @@ TEST(Alignment, NearPassDensityWhereTheMisfitIsSmall) {
     EXPECT_GT(r.misfit_start, 0.004);
     EXPECT_LT(r.misfit_start, 0.5);
     // near_pass_max_iterations_per_level on the near pass's five levels (1000 to 0.1), max_iterations_per_level's 8 otherwise
-    if (r.low_density.nodes > quarter_nodes) EXPECT_LE(r.low_density.rounds, 5 * q.near_pass_max_iterations_per_level);
+    if (r.low_density.nodes > quarter_nodes) {
+      EXPECT_LE(r.low_density.rounds, 5 * q.near_pass_max_iterations_per_level);
+    }
     return r.low_density.nodes;
   };
   const int quarter = quarter_nodes = pass_nodes(0, 0.5);  // the library's default: a quarter at any misfit
