@@ -95,6 +95,7 @@ nlohmann::json run_coarse(SurfaceMesh& mesh, const TargetSurface& target, const 
                       {"correspondences", c.correspondences}});
   return stage_json({{"nodes", r.nodes},
                      {"graph_edges", r.graph_edges},
+                     {"fitted_vertices", r.fitted_vertices},
                      {"iterations", r.iterations},
                      {"levels", r.levels},
                      {"pcg_iterations", r.pcg_iterations},
