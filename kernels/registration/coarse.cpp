@@ -137,10 +137,9 @@ double node_fit_energy(const Vec3& x, const NodeMatches& m, std::size_t j, const
 struct VertexFit {
   std::vector<Vertex> vertex;           // the vertices fitted
   std::vector<Index> node_offset;       // node j's entries: [node_offset[j], node_offset[j + 1])
-  std::vector<Index> entry_sample;      // per entry: the vertex (index into `vertex`)
-  std::vector<double> entry_weight;     // its skinning weight by the node
-  std::vector<Vec3> entry_offset;       // x_v - g_j
-  std::vector<Vec3> slot_offset;        // per vertex and influence slot t (k per vertex): x_v - g_t
+  std::vector<Index> entry_slot;        // per entry: its vertex q (index into `vertex`) and slot t, as q k + t
+  std::vector<double> slot_weight;      // per vertex and influence slot t (k per vertex): w_t (0: no node)
+  std::vector<Vec3> slot_offset;        // likewise x_v - g_t
   std::vector<Correspondence> match;    // per vertex, this round (invalid: no term)
   std::vector<Vec3> x;                  // per vertex, skinned by the current state
   double weight = 0;                    // of a vertex's term relative to a node's
@@ -169,9 +168,8 @@ VertexFit build_vertex_fit(const Problem& p, double weight, double spacing) {
       if (const Index j = g.influence_node[v.idx * K + t]; j != kInvalidIndex) ++f.node_offset[j + 1];
   for (std::size_t j = 0; j < nn; ++j) f.node_offset[j + 1] += f.node_offset[j];
   const std::size_t ne = std::size_t(f.node_offset[nn]);
-  f.entry_sample.resize(ne);
-  f.entry_weight.resize(ne);
-  f.entry_offset.resize(ne);
+  f.entry_slot.resize(ne);
+  f.slot_weight.assign(f.vertex.size() * K, 0.0);
   f.slot_offset.assign(f.vertex.size() * K, Vec3::Zero());
   std::vector<Index> fill(f.node_offset.begin(), f.node_offset.end() - 1);
   for (std::size_t q = 0; q < f.vertex.size(); ++q) {
@@ -179,11 +177,9 @@ VertexFit build_vertex_fit(const Problem& p, double weight, double spacing) {
     for (std::size_t t = 0; t < K; ++t) {
       const Index j = g.influence_node[v * K + t];
       if (j == kInvalidIndex) continue;
+      f.slot_weight[q * K + t] = g.influence_weight[v * K + t];
       f.slot_offset[q * K + t] = p.rest[v] - g.node_position[j];
-      const Index e = fill[j]++;
-      f.entry_sample[e] = Index(q);
-      f.entry_weight[e] = g.influence_weight[v * K + t];
-      f.entry_offset[e] = p.rest[v] - g.node_position[j];
+      f.entry_slot[fill[j]++] = Index(q * K + t);
     }
   }
   return f;
@@ -383,10 +379,11 @@ void assemble(const Problem& p, const std::vector<NodeState>& s, const NodeMatch
       // E_fit at the vertices node j skins (VertexFit): J = w_j u^T (x) I over (a1, a2, a3, b).
       if (vertices)
         for (Index e = vertices->node_offset[j]; e < vertices->node_offset[j + 1]; ++e) {
-          const std::size_t q = vertices->entry_sample[e];
+          const std::size_t slot = vertices->entry_slot[e], q = slot / K;
           if (!vertices->match[q].valid()) continue;
-          const double wt = vertices->entry_weight[e];
-          const Eigen::Vector4d u(vertices->entry_offset[e].x(), vertices->entry_offset[e].y(), vertices->entry_offset[e].z(), 1);
+          const double wt = vertices->slot_weight[slot];
+          const Vec3& o = vertices->slot_offset[slot];
+          const Eigen::Vector4d u(o.x(), o.y(), o.z(), 1);
           for (int m = 0; m < 4; ++m) {
             gj.segment<3>(3 * m) += wt * u[m] * vertex_residual[q];
             for (int c = 0; c < 4; ++c) D.block<3, 3>(3 * m, 3 * c) += (wt * wt * u[m] * u[c]) * vertex_w[q];
@@ -441,18 +438,19 @@ void assemble(const Problem& p, const std::vector<NodeState>& s, const NodeMatch
       std::vector<Mat12> upper(std::size_t(g.neighbor_offset[j + 1] - first_upper), Mat12::Zero());
       if (vertices)  // the vertices node j skins with a node k > j: w_k w_j (u_k u_j^T) (x) W_v
         for (Index e = vertices->node_offset[j]; e < vertices->node_offset[j + 1]; ++e) {
-          const std::size_t q = vertices->entry_sample[e];
+          const std::size_t slot = vertices->entry_slot[e], q = slot / K;
           if (!vertices->match[q].valid()) continue;
           const Index v = vertices->vertex[q].idx;
-          const double wj = vertices->entry_weight[e];
-          const Eigen::Vector4d uj(vertices->entry_offset[e].x(), vertices->entry_offset[e].y(), vertices->entry_offset[e].z(), 1);
+          const double wj = vertices->slot_weight[slot];
+          const Vec3& oj = vertices->slot_offset[slot];
+          const Eigen::Vector4d uj(oj.x(), oj.y(), oj.z(), 1);
           for (std::size_t t = 0; t < K; ++t) {
             const Index k = g.influence_node[v * K + t];
             if (k == kInvalidIndex || k <= Index(j)) continue;
             const auto at = std::lower_bound(g.neighbors.begin() + first_upper, g.neighbors.begin() + g.neighbor_offset[j + 1], k);
             const Vec3& xk = vertices->slot_offset[q * K + t];
             const Eigen::Vector4d uk(xk.x(), xk.y(), xk.z(), 1);
-            const double wk = g.influence_weight[v * K + t];
+            const double wk = vertices->slot_weight[q * K + t];
             Mat12& B = upper[std::size_t(at - (g.neighbors.begin() + first_upper))];
             for (int a = 0; a < 4; ++a)
               for (int c = 0; c < 4; ++c) B.block<3, 3>(3 * a, 3 * c) += (wk * wj * uk[a] * uj[c]) * vertex_w[q];
@@ -496,8 +494,8 @@ void apply_system(const DeformationGraph& g, const NodeSystem& sys, const Eigen:
     return Vec3(offset.x() * xj.segment<3>(0) + offset.y() * xj.segment<3>(3) + offset.z() * xj.segment<3>(6) + xj.tail<3>());
   };
   const VertexFit* vf = sys.vertices;
+  const auto K = std::size_t(g.k);
   if (vf) {  // each vertex's skinning row times x: sum_t w_t X_t u_t
-    const auto K = std::size_t(g.k);
     sys.vertex_product.resize(vf->vertex.size());
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, vf->vertex.size(), 1024), [&](const auto& r) {
       for (std::size_t q = r.begin(); q != r.end(); ++q) {
@@ -505,7 +503,7 @@ void apply_system(const DeformationGraph& g, const NodeSystem& sys, const Eigen:
         const Index v = vf->vertex[q].idx;
         for (std::size_t t = 0; t < K; ++t)
           if (const Index k = g.influence_node[v * K + t]; k != kInvalidIndex)
-            sum += g.influence_weight[v * K + t] * apply_node(std::size_t(k), vf->slot_offset[q * K + t]);
+            sum += vf->slot_weight[q * K + t] * apply_node(std::size_t(k), vf->slot_offset[q * K + t]);
         sys.vertex_product[q] = sum;
       }
     });
@@ -515,10 +513,11 @@ void apply_system(const DeformationGraph& g, const NodeSystem& sys, const Eigen:
       Vec12 yj = sys.diag[j] * x.segment<12>(Eigen::Index(12 * j));
       if (vf)  // the other nodes' share of each vertex node j skins (its own is in diag[j])
         for (Index e = vf->node_offset[j]; e < vf->node_offset[j + 1]; ++e) {
-          const std::size_t q = vf->entry_sample[e];
-          const Vec3 others = sys.vertex_product[q] - vf->entry_weight[e] * apply_node(j, vf->entry_offset[e]);
-          const Vec3 f = vf->entry_weight[e] * (sys.vertex_matrix[q] * others);
-          const Vec3& o = vf->entry_offset[e];
+          const std::size_t slot = vf->entry_slot[e], q = slot / K;
+          const double wj = vf->slot_weight[slot];
+          const Vec3& o = vf->slot_offset[slot];
+          const Vec3 others = sys.vertex_product[q] - wj * apply_node(j, o);
+          const Vec3 f = wj * (sys.vertex_matrix[q] * others);
           yj.segment<3>(0) += o.x() * f;
           yj.segment<3>(3) += o.y() * f;
           yj.segment<3>(6) += o.z() * f;
@@ -631,6 +630,12 @@ void add_pass(CoarsePhases& to, const CoarseReport& pass) {
 // start), at two thirds of the time per pass.
 constexpr double kGuidedPassAlphaRegStart = 10;
 
+// The node spacing of a graph built with `params` on a mesh of mean edge length `edge` (§4.2: node_spacing_factor
+// edges at full density; graph_density d spaces them 1/sqrt(d) wider).
+double graph_spacing(const CoarseParams& params, double edge) {
+  return params.node_spacing_factor * edge / std::sqrt(params.graph_density);
+}
+
 std::optional<NodeGuide> intrinsic_stage(SurfaceMesh& mesh, const TargetSurface& target, const CoarseParams& params,
                                          const CoarseParams& pass, std::shared_ptr<const DeformationGraph> pass_graph,
                                          const EdgeGraph& rest, double edge, CoarseReport& rep) {
@@ -639,7 +644,7 @@ std::optional<NodeGuide> intrinsic_stage(SurfaceMesh& mesh, const TargetSurface&
   // Nodes at the pass's spacing sampled on the rest state, the anchors' candidates; every length of the
   // matching in units of their spacing.
   NodeGuide guide;
-  guide.spacing = pass.node_spacing_factor * mean_edge_length(mesh) / std::sqrt(pass.graph_density);
+  guide.spacing = graph_spacing(pass, mean_edge_length(mesh));
   const std::vector<Index> nodes = poisson_disk_samples(rest, guide.spacing);
   std::vector<Vec3> x(nodes.size());
   for (std::size_t j = 0; j < nodes.size(); ++j) {
@@ -686,7 +691,7 @@ std::optional<NodeGuide> intrinsic_stage(SurfaceMesh& mesh, const TargetSurface&
   }
   // The full graph's nodes, as align_coarse_impl samples them after the pass.
   NodeGuide full;
-  full.spacing = params.node_spacing_factor * edge / std::sqrt(params.graph_density);
+  full.spacing = graph_spacing(params, edge);
   full.nodes = sample_graph_nodes(mesh, full.spacing);
   std::vector<Index> fn(full.nodes.size());
   for (std::size_t j = 0; j < fn.size(); ++j) fn[j] = full.nodes[j].idx;
@@ -704,7 +709,7 @@ std::optional<NodeGuide> intrinsic_stage(SurfaceMesh& mesh, const TargetSurface&
 double near_pass_density(const CoarseParams& params, double edge) {
   double density = params.near_pass_density;
   if (params.near_pass_min_spacing > 0) {
-    const double widest = params.node_spacing_factor * edge / std::sqrt(params.graph_density) / params.near_pass_min_spacing;
+    const double widest = graph_spacing(params, edge) / params.near_pass_min_spacing;
     density = std::min(density, widest * widest);
   }
   return std::max(density, params.coarse_pass_density);
@@ -852,7 +857,7 @@ CoarseReport align_coarse_impl(SurfaceMesh& mesh, const TargetSurface& target, c
 
   t0 = Clock::now();
   if (full_guide) guide = &*full_guide;  // the intrinsic stage's matches for the full graph's nodes
-  const double spacing = guide ? guide->spacing : params.node_spacing_factor * edge / std::sqrt(params.graph_density);
+  const double spacing = guide ? guide->spacing : graph_spacing(params, edge);
   std::vector<Vertex> nodes = guide ? guide->nodes : sample_graph_nodes(mesh, spacing);
   rep.node_spacing = spacing;
   const double fitted_first = params.check_fit_first_tolerance > 0 ? params.check_fit_first_tolerance : params.fit_tolerance;
