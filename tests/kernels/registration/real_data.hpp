@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "io/mesh_reader.hpp"
+#include "io/ply_writer.hpp"
 #include "kernels/improve/improve.hpp"
 #include "kernels/mesh/mesh_convert.hpp"
 #include "kernels/mesh/mesh_queries.hpp"
@@ -135,6 +136,45 @@ inline void print_breakdown(const char* stage, const ErrorBreakdown& b) {
   std::printf("    %-22s truth %% mean %7.3f median %7.3f p90 %7.3f | to target %6.3f %% | off %4.1f%% slid %4.1f%% "
               "(wrong part %4.1f%%)\n",
               stage, b.mean, b.median, b.p90, b.mean_target, 100 * b.off, 100 * b.slid, 100 * b.wrong_part);
+}
+
+//! Mean relative change of the source's edge lengths |l' - l| / l at positions `x` (by handle index): how far from
+//! isometric a deformation is (the elephant's ground truth, frame 1 -> 16: 5 %).
+inline double mean_edge_strain(const SurfaceMesh& source, std::span<const Vec3> x) {
+  const MeshData d = to_mesh_data(source, false);
+  double sum = 0;
+  std::size_t n = 0;
+  for (const auto& t : d.triangles)
+    for (int a = 0; a < 3; ++a) {
+      const auto i = std::size_t(t[a]), j = std::size_t(t[(a + 1) % 3]);
+      if (i > j) continue;  // each interior edge once (a boundary edge seen from one side only may be skipped)
+      const double l0 = (source.positions()[i] - source.positions()[j]).norm();
+      if (!(l0 > 0)) continue;
+      sum += std::abs((x[i] - x[j]).norm() - l0) / l0;
+      ++n;
+    }
+  return n ? sum / double(n) : 0;
+}
+
+//! Diagnostics dump: `prefix`_source.ply, _aligned.ply and _truth.ply, the source's triangles at its rest positions,
+//! at `x` and at the ground truth, coloured by the ground-truth error at `x` (blue 0 to red 3 % of the diagonal);
+//! ascii, for `topotrack render`.
+inline void write_error_meshes(const std::string& prefix, const AlignmentPair& pair, std::span<const Vec3> x) {
+  const std::vector<double> err = truth_errors(x, pair.truth, pair.diagonal);
+  MeshData out = to_mesh_data(pair.source, false);
+  VertexAttribute color{"color", 3, {}};
+  for (const double e : err) {
+    const float t = float(std::min(1.0, e / 0.03));
+    color.values.insert(color.values.end(), {t, 0.2f, 1 - t});
+  }
+  out.attributes = {color};
+  const auto write = [&](const char* name, std::span<const Vec3> at) {
+    for (std::size_t i = 0; i < out.positions.size() && i < at.size(); ++i) out.positions[i] = {at[i].x(), at[i].y(), at[i].z()};
+    write_ply(prefix + name, out, PlyWriteOptions{true});
+  };
+  write("_source.ply", pair.source.positions());
+  write("_aligned.ply", x);
+  write("_truth.ply", pair.truth);
 }
 
 //! The source split into `parts` clusters by k-means on its positions (deterministic: farthest-point

@@ -30,7 +30,7 @@ struct Figures {
 // (per-round figures), TOPOTRACK_TEST_RIGID_TRUTH=1 (the error of the best rigid motion: pcow 9.5%, elephant 6.0%),
 // TOPOTRACK_TEST_INTRINSIC=0|1, TOPOTRACK_TEST_INTRINSIC_PASSES=n (CoarseParams::intrinsic_full_graph,
 // intrinsic_passes), TOPOTRACK_TEST_INTRINSIC_ANCHORS=n, TOPOTRACK_TEST_INTRINSIC_MISPLACED=x, TOPOTRACK_TEST_FINE_ROUNDS=n, TOPOTRACK_TEST_FINE_MAX_ROUNDS=n, TOPOTRACK_TEST_FINE_MORE_RESIDUAL=x, TOPOTRACK_TEST_FINE_NORMAL_ANGLE=deg,
-// TOPOTRACK_TEST_FINE_NORMAL_DISPLACEMENT=0|1 (FineParams), TOPOTRACK_TEST_DENSE_SPACING=x (0: no denser graph),
+// TOPOTRACK_TEST_FINE_NORMAL_DISPLACEMENT=0|1 (FineParams), TOPOTRACK_TEST_WRITE_ERRORS=prefix (test::write_error_meshes), TOPOTRACK_TEST_DENSE_SPACING=x (0: no denser graph),
 // TOPOTRACK_TEST_VERTEX_FIT=x (0: the nodes' fit alone), TOPOTRACK_TEST_VERTEX_FIT_SPACING=x, TOPOTRACK_TEST_VERTEX_FIT_DISAGREE=x
 // (CoarseParams::vertex_fit_weight, vertex_fit_spacing, vertex_fit_max_disagreement),
 // TOPOTRACK_TEST_DENSE_ALPHA=x (dense_spacing_factor, dense_alpha_reg), TOPOTRACK_TEST_ALPHA_START_WITHOUT_PASS=x,
@@ -176,8 +176,11 @@ Figures run_pair(const std::string& name, int frame, int gap, double edge_factor
   if (const char* e = std::getenv("TOPOTRACK_TEST_FINE_NORMAL_DISPLACEMENT")) fine.normal_displacement = std::atoi(e) != 0;
   const FineReport fr = align_fine(mesh, target, fine);
   f.aligned = test::alignment_error(mesh, pair.truth, target, pair.diagonal);
+  if (const char* e = std::getenv("TOPOTRACK_TEST_WRITE_ERRORS")) test::write_error_meshes(e, pair, mesh.positions());
   if (stages) {
     test::print_breakdown("fine", test::error_breakdown(mesh.positions(), pair, target, truth_index));
+    std::printf("  edge strain |l' - l| / l: aligned %.4f, ground truth %.4f\n", test::mean_edge_strain(pair.source, mesh.positions()),
+                test::mean_edge_strain(pair.source, pair.truth));
     std::printf("  unaligned"); test::print_parts(pair.source.positions(), pair, parts);
     std::printf("  aligned  "); test::print_parts(mesh.positions(), pair, parts);
   }
