@@ -95,6 +95,35 @@ Vec3 angle_weighted_normal(const SurfaceMesh& mesh, Vertex v, std::vector<Halfed
   return len > 0 ? Vec3(n / len) : Vec3::Zero();
 }
 
+// Each node's normal transform A^-T (its cofactor matrix where A is near singular: the same direction up to sign).
+std::vector<Mat3> normal_transforms(const std::vector<NodeState>& s) {
+  std::vector<Mat3> out(s.size());
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, s.size(), 256), [&](const auto& r) {
+    for (std::size_t j = r.begin(); j != r.end(); ++j) {
+      const Mat3& A = s[j].A;
+      Mat3 C;  // cofactors: C = det(A) A^-T
+      C.col(0) = A.col(1).cross(A.col(2));
+      C.col(1) = A.col(2).cross(A.col(0));
+      C.col(2) = A.col(0).cross(A.col(1));
+      const double det = A.col(0).dot(C.col(0));
+      out[j] = std::abs(det) > 1e-12 ? Mat3(C / det) : C;
+    }
+  });
+  return out;
+}
+
+// The normal of vertex v (rest normal n) skinned like its position: sum_t w_t A_t^-T n, normalised (the embedded
+// deformation's normals). Used for the vertices' fit (VertexFit), where one-ring skinning cost 7 skinnings a vertex.
+Vec3 blended_normal(const Problem& p, const std::vector<Mat3>& transform, Index v, const Vec3& n) {
+  const auto K = std::size_t(p.graph.k);
+  Vec3 out = Vec3::Zero();
+  for (std::size_t t = 0; t < K; ++t)
+    if (const Index j = p.graph.influence_node[v * K + t]; j != kInvalidIndex)
+      out += p.graph.influence_weight[v * K + t] * (transform[j] * n);
+  const double len = out.norm();
+  return len > 0 ? Vec3(out / len) : n;
+}
+
 // Angle-weighted normal of vertex v of the deformed mesh, from its deformed one-ring.
 Vec3 skinned_normal(const Problem& p, const std::vector<NodeState>& s, Vertex v, std::vector<Halfedge>& ring) {
   return angle_weighted_normal(p.mesh, v, ring, [&](Index u) { return skin(p, s, u); });
@@ -140,6 +169,7 @@ struct VertexFit {
   std::vector<Index> entry_slot;        // per entry: its vertex q (index into `vertex`) and slot t, as q k + t
   std::vector<double> slot_weight;      // per vertex and influence slot t (k per vertex): w_t (0: no node)
   std::vector<Vec3> slot_offset;        // likewise x_v - g_t
+  std::vector<Vec3> rest_normal;        // per vertex, of the rest mesh (angle-weighted)
   std::vector<Correspondence> match;    // per vertex, this round (invalid: no term)
   std::vector<Vec3> x;                  // per vertex, skinned by the current state
   double weight = 0;                    // of a vertex's term relative to a node's
@@ -172,7 +202,10 @@ VertexFit build_vertex_fit(const Problem& p, double weight, double spacing) {
   f.slot_weight.assign(f.vertex.size() * K, 0.0);
   f.slot_offset.assign(f.vertex.size() * K, Vec3::Zero());
   std::vector<Index> fill(f.node_offset.begin(), f.node_offset.end() - 1);
+  f.rest_normal.resize(f.vertex.size());
+  std::vector<Halfedge> ring;
   for (std::size_t q = 0; q < f.vertex.size(); ++q) {
+    f.rest_normal[q] = angle_weighted_normal(p.mesh, f.vertex[q], ring, [&](Index u) { return p.rest[u]; });
     const Index v = f.vertex[q].idx;
     for (std::size_t t = 0; t < K; ++t) {
       const Index j = g.influence_node[v * K + t];
@@ -295,10 +328,12 @@ Eigen::Matrix4d coordinate_average(const Mat12& M) {
 // d = g_k - g_j: (H x)_j gets, from x_k, -w d_m b_k in column m of A_j and
 // w (sum_m d_m a_m,k) - 2 w b_k in b_j.
 struct NodeSystem {
-  std::vector<Mat12> diag, diag_inverse;
+  std::vector<Mat12> diag;          // D_j without the vertices' share (applied through the vertices, below)
+  std::vector<Mat12> diag_inverse;  // of the whole D_j, the vertices' share included
   double smooth = 0;
-  // With a vertex fit (VertexFit), the coupling of the nodes sharing a vertex: applied through the vertex, the
-  // product of its row of the skinning with x in `vertex_product` (scratch).
+  // With a vertex fit (VertexFit), the vertices' share of H, diagonal blocks included: applied through each vertex,
+  // W_v times the product of its row of the skinning with x in `vertex_product` (scratch), then J_v^T of that. This
+  // costs one 3 x 3 product per vertex instead of one per vertex and node (measured in docs/results.md 2026-12-03).
   const VertexFit* vertices = nullptr;
   std::vector<Mat3> vertex_matrix;  // per vertex: its W_v (zero: no match)
   mutable std::vector<Vec3> vertex_product;
@@ -376,19 +411,6 @@ void assemble(const Problem& p, const std::vector<NodeState>& s, const NodeMatch
       };
       add_fit(corr.forward[j], 1);
       if (!corr.backward.empty()) add_fit(corr.backward[j], w.backward);
-      // E_fit at the vertices node j skins (VertexFit): J = w_j u^T (x) I over (a1, a2, a3, b).
-      if (vertices)
-        for (Index e = vertices->node_offset[j]; e < vertices->node_offset[j + 1]; ++e) {
-          const std::size_t slot = vertices->entry_slot[e], q = slot / K;
-          if (!vertices->match[q].valid()) continue;
-          const double wt = vertices->slot_weight[slot];
-          const Vec3& o = vertices->slot_offset[slot];
-          const Eigen::Vector4d u(o.x(), o.y(), o.z(), 1);
-          for (int m = 0; m < 4; ++m) {
-            gj.segment<3>(3 * m) += wt * u[m] * vertex_residual[q];
-            for (int c = 0; c < 4; ++c) D.block<3, 3>(3 * m, 3 * c) += (wt * wt * u[m] * u[c]) * vertex_w[q];
-          }
-        }
       // E_smooth over both directed edges j->k and k->j.
       for (Index q = g.neighbor_offset[j]; q < g.neighbor_offset[j + 1]; ++q) {
         const Index k = g.neighbors[q];
@@ -412,12 +434,23 @@ void assemble(const Problem& p, const std::vector<NodeState>& s, const NodeMatch
       // Levenberg–Marquardt damping.
       for (int c = 0; c < 9; ++c) D(c, c) += w.damping_A;
       for (int c = 9; c < 12; ++c) D(c, c) += w.damping_b;
+      if (nodes) nodes->diag[j] = D;  // without the vertices' share, which apply_system adds through the vertices
+      // E_fit at the vertices node j skins (VertexFit): J = w_j u^T (x) I over (a1, a2, a3, b).
+      if (vertices)
+        for (Index e = vertices->node_offset[j]; e < vertices->node_offset[j + 1]; ++e) {
+          const std::size_t slot = vertices->entry_slot[e], q = slot / K;
+          if (!vertices->match[q].valid()) continue;
+          const double wt = vertices->slot_weight[slot];
+          const Vec3& o = vertices->slot_offset[slot];
+          const Eigen::Vector4d u(o.x(), o.y(), o.z(), 1);
+          for (int m = 0; m < 4; ++m) {
+            gj.segment<3>(3 * m) += wt * u[m] * vertex_residual[q];
+            for (int c = 0; c < 4; ++c) D.block<3, 3>(3 * m, 3 * c) += (wt * wt * u[m] * u[c]) * vertex_w[q];
+          }
+        }
 
       grad.segment<12>(Eigen::Index(12 * j)) = gj;
-      if (nodes) {
-        nodes->diag[j] = D;
-        nodes->diag_inverse[j] = D.ldlt().solve(Mat12::Identity());
-      }
+      if (nodes) nodes->diag_inverse[j] = D.ldlt().solve(Mat12::Identity());
       if (values)
         for (int a = 0; a < 12; ++a) {
           int pos = outer[12 * j + a];
@@ -495,29 +528,31 @@ void apply_system(const DeformationGraph& g, const NodeSystem& sys, const Eigen:
   };
   const VertexFit* vf = sys.vertices;
   const auto K = std::size_t(g.k);
-  if (vf) {  // each vertex's skinning row times x: sum_t w_t X_t u_t
+  if (vf) {  // each vertex's weight times its skinning row times x: W_v sum_t w_t X_t u_t
     sys.vertex_product.resize(vf->vertex.size());
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, vf->vertex.size(), 1024), [&](const auto& r) {
       for (std::size_t q = r.begin(); q != r.end(); ++q) {
+        if (!vf->match[q].valid()) {
+          sys.vertex_product[q].setZero();
+          continue;
+        }
         Vec3 sum = Vec3::Zero();
         const Index v = vf->vertex[q].idx;
         for (std::size_t t = 0; t < K; ++t)
           if (const Index k = g.influence_node[v * K + t]; k != kInvalidIndex)
             sum += vf->slot_weight[q * K + t] * apply_node(std::size_t(k), vf->slot_offset[q * K + t]);
-        sys.vertex_product[q] = sum;
+        sys.vertex_product[q] = sys.vertex_matrix[q] * sum;
       }
     });
   }
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nn, 128), [&](const auto& range) {
     for (std::size_t j = range.begin(); j != range.end(); ++j) {
       Vec12 yj = sys.diag[j] * x.segment<12>(Eigen::Index(12 * j));
-      if (vf)  // the other nodes' share of each vertex node j skins (its own is in diag[j])
+      if (vf)  // the vertices node j skins, their whole share (diag[j] holds none of it): w_j u (x) W_v J_v x
         for (Index e = vf->node_offset[j]; e < vf->node_offset[j + 1]; ++e) {
-          const std::size_t slot = vf->entry_slot[e], q = slot / K;
-          const double wj = vf->slot_weight[slot];
+          const std::size_t slot = vf->entry_slot[e];
           const Vec3& o = vf->slot_offset[slot];
-          const Vec3 others = sys.vertex_product[q] - wj * apply_node(j, o);
-          const Vec3 f = wj * (sys.vertex_matrix[q] * others);
+          const Vec3 f = vf->slot_weight[slot] * sys.vertex_product[slot / K];
           yj.segment<3>(0) += o.x() * f;
           yj.segment<3>(3) += o.y() * f;
           yj.segment<3>(6) += o.z() * f;
@@ -964,11 +999,11 @@ CoarseReport align_coarse_impl(SurfaceMesh& mesh, const TargetSurface& target, c
     const bool fit_vertices = !vertex_fit.empty();
     if (fit_vertices) {  // the vertices' matches along their skinned normals, like the nodes'
       vertex_fit.x.resize(vertex_fit.vertex.size());
+      const std::vector<Mat3> transform = normal_transforms(state);
       tbb::parallel_for(tbb::blocked_range<std::size_t>(0, vertex_fit.vertex.size(), 256), [&](const auto& r) {
-        std::vector<Halfedge> ring;
         for (std::size_t q = r.begin(); q != r.end(); ++q) {
           vertex_fit.x[q] = skin(problem, state, vertex_fit.vertex[q].idx);
-          vertex_n[q] = skinned_normal(problem, state, vertex_fit.vertex[q], ring);
+          vertex_n[q] = blended_normal(problem, transform, vertex_fit.vertex[q].idx, vertex_fit.rest_normal[q]);
         }
       });
       vertex_fit.match = find_correspondences(target, vertex_fit.x, vertex_n, cparams);
