@@ -92,6 +92,7 @@ std::vector<Binding> bindings(TrackerParams& p) {
       {"coarse.intrinsic_misplaced_spacings", &p.coarse_params.intrinsic.misplaced_spacings, 0, 1e6},
       {"coarse.dense_spacing_factor", &p.coarse_params.dense_spacing_factor, 0, 1e3},
       {"coarse.dense_alpha_reg", &p.coarse_params.dense_alpha_reg, 1e-12, inf},
+      {"coarse.dense_max_pcg_iterations", &p.coarse_params.dense_max_pcg_iterations, 1, 1e6},
       {"coarse.min_nodes", &p.coarse_params.min_nodes, 0, 1e7},
       {"coarse.min_node_spacing_factor", &p.coarse_params.min_node_spacing_factor, 1e-3, 1e3},
       {"coarse.vertex_fit_weight", &p.coarse_params.vertex_fit_weight, 0, inf},

@@ -5,6 +5,7 @@
 
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <cstdlib>
 #include <chrono>
 #include <cmath>
 #include <limits>
@@ -468,50 +469,72 @@ void assemble(const Problem& p, const std::vector<NodeState>& s, const NodeMatch
       const Index first_upper = Index(std::upper_bound(g.neighbors.begin() + g.neighbor_offset[j],
                                                        g.neighbors.begin() + g.neighbor_offset[j + 1], Index(j)) -
                                       g.neighbors.begin());
-      std::vector<Mat12> upper(std::size_t(g.neighbor_offset[j + 1] - first_upper), Mat12::Zero());
-      if (vertices)  // the vertices node j skins with a node k > j: w_k w_j (u_k u_j^T) (x) W_v
+      const auto n_upper = std::size_t(g.neighbor_offset[j + 1] - first_upper);
+      // The vertices node j skins with a node k > j, each as f(m, w_k w_j u_k u_j^T, W_v): the block
+      // w_k w_j (u_k u_j^T) (x) W_v of H_kj, k the m-th upper neighbour.
+      const auto vertex_pairs = [&](const auto& f) {
+        if (!vertices) return;
         for (Index e = vertices->node_offset[j]; e < vertices->node_offset[j + 1]; ++e) {
           const std::size_t slot = vertices->entry_slot[e], q = slot / K;
           if (!vertices->match[q].valid()) continue;
           const Index v = vertices->vertex[q].idx;
-          const double wj = vertices->slot_weight[slot];
           const Vec3& oj = vertices->slot_offset[slot];
-          const Eigen::Vector4d uj(oj.x(), oj.y(), oj.z(), 1);
+          const Eigen::Vector4d uj = vertices->slot_weight[slot] * Eigen::Vector4d(oj.x(), oj.y(), oj.z(), 1);
           for (std::size_t t = 0; t < K; ++t) {
             const Index k = g.influence_node[v * K + t];
             if (k == kInvalidIndex || k <= Index(j)) continue;
             const auto at = std::lower_bound(g.neighbors.begin() + first_upper, g.neighbors.begin() + g.neighbor_offset[j + 1], k);
-            const Vec3& xk = vertices->slot_offset[q * K + t];
-            const Eigen::Vector4d uk(xk.x(), xk.y(), xk.z(), 1);
-            const double wk = vertices->slot_weight[q * K + t];
-            Mat12& B = upper[std::size_t(at - (g.neighbors.begin() + first_upper))];
-            for (int a = 0; a < 4; ++a)
-              for (int c = 0; c < 4; ++c) B.block<3, 3>(3 * a, 3 * c) += (wk * wj * uk[a] * uj[c]) * vertex_w[q];
+            const Vec3& ok = vertices->slot_offset[q * K + t];
+            const Eigen::Vector4d uk = vertices->slot_weight[q * K + t] * Eigen::Vector4d(ok.x(), ok.y(), ok.z(), 1);
+            f(std::size_t(at - (g.neighbors.begin() + first_upper)), Eigen::Matrix4d(uk * uj.transpose()), vertex_w[q]);
           }
         }
-      int m = 0;
-      for (Index q = first_upper; q < g.neighbor_offset[j + 1]; ++q) {
-        const Index k = g.neighbors[q];
-        const Vec3 d = g.node_position[k] - gpos;
-        Mat12& B = upper[std::size_t(m)];
-        // j -> k: J_k = [0, 0, 0, -I], J_j = [d0 I, d1 I, d2 I, I]  =>  rows b_k.
-        for (int c2 = 0; c2 < 4; ++c2) B.block<3, 3>(9, 3 * c2).diagonal().array() -= w.smooth * (c2 < 3 ? d[c2] : 1.0);
-        // k -> j: J_k = [-d0 I, -d1 I, -d2 I, I] (its edge vector is -d), J_j = [0, 0, 0, -I]  =>  columns b_j.
-        for (int c1 = 0; c1 < 4; ++c1)
-          B.block<3, 3>(3 * c1, 9).diagonal().array() -= w.smooth * (c1 < 3 ? -d[c1] : 1.0);
-        if (values)
+      };
+      // E_smooth's share of H_kj: j -> k (J_k = [0, 0, 0, -I], J_j = [d0 I, d1 I, d2 I, I]) in the rows of b_k,
+      // k -> j (J_k = [-d0 I, -d1 I, -d2 I, I], its edge vector -d; J_j = [0, 0, 0, -I]) in the columns of b_j: the
+      // diagonal of block (3, c) of the 4 x 4 block grid gets -w coefficient_row[c], of block (c, 3) -w coefficient_col[c].
+      const auto smooth_coefficients = [&](std::size_t m, double (&row)[4], double (&col)[4]) {
+        const Vec3 d = g.node_position[g.neighbors[first_upper + Index(m)]] - gpos;
+        for (int c = 0; c < 4; ++c) {
+          row[c] = w.smooth * (c < 3 ? d[c] : 1.0);
+          col[c] = w.smooth * (c < 3 ? -d[c] : 1.0);
+        }
+      };
+      if (values) {  // the direct path: the whole 12 x 12 blocks
+        std::vector<Mat12> upper(n_upper, Mat12::Zero());
+        vertex_pairs([&](std::size_t m, const Eigen::Matrix4d& M, const Mat3& W) {
+          for (int a = 0; a < 4; ++a)
+            for (int c = 0; c < 4; ++c) upper[m].block<3, 3>(3 * a, 3 * c) += M(a, c) * W;
+        });
+        for (std::size_t m = 0; m < n_upper; ++m) {
+          Mat12& B = upper[m];
+          double row[4], col[4];
+          smooth_coefficients(m, row, col);
+          for (int c = 0; c < 4; ++c) {
+            B.block<3, 3>(9, 3 * c).diagonal().array() -= row[c];
+            B.block<3, 3>(3 * c, 9).diagonal().array() -= col[c];
+          }
           for (int a = 0; a < 12; ++a) {
-            const int pos = outer[12 * j + a] + (12 - a) + 12 * m;
+            const int pos = outer[12 * j + a] + (12 - a) + 12 * int(m);
             for (int r = 0; r < 12; ++r) values[pos + r] = B(r, a);
           }
-        if (precond) {
-          const Eigen::Matrix4d P = coordinate_average(B);
+        }
+      } else {  // the PCG path: only the preconditioner's coordinate averages, built as 4 x 4 blocks
+        std::vector<Eigen::Matrix4d> upper(n_upper, Eigen::Matrix4d::Zero());
+        vertex_pairs([&](std::size_t m, const Eigen::Matrix4d& M, const Mat3& W) { upper[m] += (W.trace() / 3.0) * M; });
+        for (std::size_t m = 0; m < n_upper; ++m) {
+          Eigen::Matrix4d& P = upper[m];
+          double row[4], col[4];
+          smooth_coefficients(m, row, col);
+          for (int c = 0; c < 4; ++c) {
+            P(3, c) -= row[c];
+            P(c, 3) -= col[c];
+          }
           for (int a = 0; a < 4; ++a) {
-            const int pos = pouter[4 * j + a] + (4 - a) + 4 * m;
+            const int pos = pouter[4 * j + a] + (4 - a) + 4 * int(m);
             for (int r = 0; r < 4; ++r) pvalues[pos + r] = P(r, a);
           }
         }
-        ++m;
       }
     }
   });
@@ -577,8 +600,8 @@ void apply_system(const DeformationGraph& g, const NodeSystem& sys, const Eigen:
 // the stiff rigidity coupling of x, y, z within a node), then a coarse correction by the Cholesky
 // factor of the per-coordinate matrix P (the coupling between nodes), then block Jacobi again. The
 // node's 12 unknowns (a1, a2, a3, b) are 4 rows of (x, y, z), so a vector is already P's 4N x 3
-// right-hand side, row-major.
-int preconditioned_cg(const DeformationGraph& g, const NodeSystem& sys, const BlockCholesky& P,
+// right-hand side, row-major. Without P (CoarseParams::pcg_coarse_correction off): block Jacobi alone.
+int preconditioned_cg(const DeformationGraph& g, const NodeSystem& sys, const BlockCholesky* P,
                       const Eigen::VectorXd& rhs, double tolerance, int max_iterations, Eigen::VectorXd& x) {
   const Eigen::Index nn = rhs.size() / 12;
   Eigen::VectorXd t(rhs.size()), Ht(rhs.size());
@@ -594,9 +617,10 @@ int preconditioned_cg(const DeformationGraph& g, const NodeSystem& sys, const Bl
   auto precondition = [&](const Eigen::VectorXd& r, Eigen::VectorXd& z) {
     z.resize(r.size());
     apply_blocks(r, z, false);
+    if (!P) return;
     apply_system(g, sys, z, Ht);
     t = r - Ht;
-    P.solve3(t.data());
+    P->solve3(t.data());
     z += t;
     apply_system(g, sys, z, Ht);
     t = r - Ht;
@@ -766,7 +790,7 @@ double node_spacing_for(const SurfaceMesh& mesh, const CoarseParams& params) {
 
 CoarseReport align_coarse(SurfaceMesh& mesh, const TargetSurface& target, const CoarseParams& params) {
   const auto t_total = Clock::now();
-  if (!(params.dense_spacing_factor >= 0) || !(params.dense_alpha_reg > 0) || params.min_nodes < 0 ||
+  if (!(params.dense_spacing_factor >= 0) || !(params.dense_alpha_reg > 0) || params.dense_max_pcg_iterations < 1 || params.min_nodes < 0 ||
       !(params.min_node_spacing_factor > 0))
     TT_THROW(InvalidInput, "align_coarse: invalid parameters");
   if (mesh.n_vertices() == 0 || mesh.n_faces() == 0) TT_THROW(InvalidInput, "align_coarse: empty mesh");
@@ -792,6 +816,10 @@ CoarseReport align_coarse(SurfaceMesh& mesh, const TargetSurface& target, const 
   dense.intrinsic_passes = 0;
   dense.check_fit_first = false;  // the full graph's nodes are fitted; the denser graph's finer fit is the point
   report_hooks_as(dense, params, CoarseStage::DenseLevel);
+  // Its rounds start where the full graph's converged: a local refinement, which block Jacobi alone resolves in a
+  // few PCG iterations (CoarseParams::dense_max_pcg_iterations).
+  dense.max_pcg_iterations = params.dense_max_pcg_iterations;
+  dense.pcg_coarse_correction = false;
   const CoarseReport dr = align_coarse_impl(mesh, target, dense, nullptr);
   add_pass(rep.dense, dr);
   rep.seconds_total = seconds_since(t_total);
@@ -944,13 +972,14 @@ CoarseReport align_coarse_impl(SurfaceMesh& mesh, const TargetSurface& target, c
   rep.graph_edges = int(graph.edges.size());
   const bool direct = params.linear_solver == CoarseLinearSolver::Direct;
   SystemPattern pattern = direct ? build_pattern(graph, 12) : SystemPattern{};
-  SystemPattern precond = direct ? SystemPattern{} : build_pattern(graph, 4);
+  const bool coarse_correction = !direct && params.pcg_coarse_correction;
+  SystemPattern precond = coarse_correction ? build_pattern(graph, 4) : SystemPattern{};
   SparseCholesky solver(params.solver);
   rep.seconds_graph = seconds_since(t0) - rep.seconds_correspondences;
   t0 = Clock::now();
   BlockCholesky block_solver;
   if (direct) solver.analyze(pattern.H);
-  else block_solver.analyze(graph.neighbor_offset, graph.neighbors);
+  else if (coarse_correction) block_solver.analyze(graph.neighbor_offset, graph.neighbors);
   bool refactor = true;
   NodeSystem node_system;
   rep.seconds_factorisation += seconds_since(t0);
@@ -1066,10 +1095,10 @@ CoarseReport align_coarse_impl(SurfaceMesh& mesh, const TargetSurface& target, c
       rep.fit_start = before.fit;
       first = false;
     }
-    assemble(problem, state, matches, vertices, w, direct ? &pattern : nullptr, direct ? nullptr : &precond,
+    assemble(problem, state, matches, vertices, w, direct ? &pattern : nullptr, coarse_correction ? &precond : nullptr,
              direct ? nullptr : &node_system, grad);
     rep.seconds_assembly += seconds_since(t0);
-    if (direct || refactor || params.refactor_each_round) {
+    if (direct || (coarse_correction && (refactor || params.refactor_each_round))) {
       t0 = Clock::now();
       if (direct) solver.factorize(pattern.H);
       else block_solver.factorize(precond.H);
@@ -1083,7 +1112,7 @@ CoarseReport align_coarse_impl(SurfaceMesh& mesh, const TargetSurface& target, c
     int pcg_iterations = 0;
     if (direct) delta = solver.solve(Eigen::VectorXd(-grad));
     else
-      pcg_iterations = preconditioned_cg(graph, node_system, block_solver, -grad, params.pcg_tolerance,
+      pcg_iterations = preconditioned_cg(graph, node_system, coarse_correction ? &block_solver : nullptr, -grad, params.pcg_tolerance,
                                          params.max_pcg_iterations, delta);
     rep.pcg_iterations += pcg_iterations;
     rep.seconds_solve += seconds_since(t0);

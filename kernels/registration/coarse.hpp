@@ -129,6 +129,9 @@ struct CoarseParams {
   //! 100 (bench/registration, blobs tracker): 24% less coarse time per blobs frame with drift 0.302% vs
   //! 0.320% of the diagonal; large motion 3x faster on elephant, same or lower ground-truth error.
   int max_pcg_iterations = 15;
+  //! The PCG preconditioner's coarse correction by the per-coordinate Cholesky factor (SeparablePCG); off: block
+  //! Jacobi alone, no factorisation (the denser graph's, below).
+  bool pcg_coarse_correction = true;
   //! Take the rotational part of each node's Gauss–Newton step along a rotation (a retraction: the
   //! step is the same to first order) rather than along the straight line A + t dA, whose departure
   //! from orthogonality the rigidity term penalises quadratically (our addition; the energy, weights and
@@ -241,6 +244,11 @@ struct CoarseParams {
   //! graph's nodes can. `topotrack align` takes kLargeMotionDenseSpacingFactor.
   double dense_spacing_factor = 0;
   double dense_alpha_reg = 0.01;
+  //! The denser graph's rounds refine a converged fit locally: their PCG runs with block Jacobi alone
+  //! (pcg_coarse_correction off) and at most this many iterations. Measured (docs/results.md 2026-12-03): samba ten-run
+  //! sum 1.6641 -> 1.6621 (15 iterations with the coarse correction -> 3 without); the bench's samba re-meshed to 98k,
+  //! frame 1 -> 16 (TOPOTRACK_TEST_SOURCE_REFINE=0.24) 0.0797 -> 0.0798 %, its denser graph 2.2 -> ~0.9 s.
+  int dense_max_pcg_iterations = 3;
   //! A fitting term at the mesh's vertices too (our addition; 0: the paper's, at the nodes only, the default and the
   //! tracker's): vertices sampled `vertex_fit_spacing` node spacings apart (0: every vertex) are matched along their
   //! skinned normals like the nodes (same pruning), each term weighted vertex_fit_weight * nodes / vertices relative to

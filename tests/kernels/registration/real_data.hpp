@@ -14,6 +14,7 @@
 
 #include "io/mesh_reader.hpp"
 #include "io/ply_writer.hpp"
+#include "kernels/eval/drift.hpp"
 #include "kernels/improve/improve.hpp"
 #include "kernels/mesh/mesh_convert.hpp"
 #include "kernels/mesh/mesh_queries.hpp"
@@ -57,6 +58,16 @@ inline AlignmentPair make_pair(const std::string& name, int frame, int gap, doub
   p.diagonal = bounding_box(gt).diagonal();
   p.target_mesh = resample(gt, edge_factor);
   return p;
+}
+
+//! The pair with its source re-meshed at `edge_factor` of its mean edge length (the benchmark's larger sizes), each
+//! new vertex's ground truth carried from the old source's: its closest point on the old source, at the same
+//! barycentric coordinates of the same triangle in the ground-truth frame (expected_by_correspondence).
+inline void refine_source(AlignmentPair& pair, double edge_factor) {
+  const TargetSurface old = TargetSurface::from_mesh(pair.source);  // no deleted vertices: its indices are the handles
+  SurfaceMesh fine = resample(pair.source, edge_factor);
+  pair.truth = expected_by_correspondence(fine.positions(), old, pair.truth);
+  pair.source = std::move(fine);
 }
 
 struct AlignmentError {
