@@ -5,7 +5,6 @@
 
 #include <Eigen/Geometry>
 #include <algorithm>
-#include <cstdlib>
 #include <chrono>
 #include <cmath>
 #include <limits>
@@ -491,8 +490,8 @@ void assemble(const Problem& p, const std::vector<NodeState>& s, const NodeMatch
         }
       };
       // E_smooth's share of H_kj: j -> k (J_k = [0, 0, 0, -I], J_j = [d0 I, d1 I, d2 I, I]) in the rows of b_k,
-      // k -> j (J_k = [-d0 I, -d1 I, -d2 I, I], its edge vector -d; J_j = [0, 0, 0, -I]) in the columns of b_j: the
-      // diagonal of block (3, c) of the 4 x 4 block grid gets -w coefficient_row[c], of block (c, 3) -w coefficient_col[c].
+      // k -> j (J_k = [-d0 I, -d1 I, -d2 I, I], its edge vector -d; J_j = [0, 0, 0, -I]) in the columns of b_j: of the
+      // 4 x 4 grid of 3 x 3 blocks, the diagonal of block (3, c) gets -row[c] and that of block (c, 3) -col[c].
       const auto smooth_coefficients = [&](std::size_t m, double (&row)[4], double (&col)[4]) {
         const Vec3 d = g.node_position[g.neighbors[first_upper + Index(m)]] - gpos;
         for (int c = 0; c < 4; ++c) {
