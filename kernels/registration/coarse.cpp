@@ -1029,7 +1029,7 @@ CoarseReport align_coarse_impl(SurfaceMesh& mesh, const TargetSurface& target, c
           if (backward) back[j] = Correspondence{};
         }
     const bool fit_vertices = !vertex_fit.empty();
-    if (fit_vertices) {  // the vertices' matches along their skinned normals, like the nodes'
+    if (fit_vertices) {  // the vertices' matches along their normals (blended_normal), pruned like the nodes'
       vertex_fit.x.resize(vertex_fit.vertex.size());
       const std::vector<Mat3> transform = normal_transforms(state);
       tbb::parallel_for(tbb::blocked_range<std::size_t>(0, vertex_fit.vertex.size(), 256), [&](const auto& r) {

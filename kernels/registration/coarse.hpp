@@ -251,7 +251,7 @@ struct CoarseParams {
   int dense_max_pcg_iterations = 3;
   //! A fitting term at the mesh's vertices too (our addition; 0: the paper's, at the nodes only, the default and the
   //! tracker's): vertices sampled `vertex_fit_spacing` node spacings apart (0: every vertex) are matched along their
-  //! skinned normals like the nodes (same pruning), each term weighted vertex_fit_weight * nodes / vertices relative to
+  //! normals (their nodes' A^-T blended, applied to the rest normal) like the nodes (same pruning), each term weighted vertex_fit_weight * nodes / vertices relative to
   //! a node's, so that the data, not the regularisation alone, sets each node's A_j (its rotation and shape): with the
   //! nodes' matches alone the linear blend of a few nodes cannot follow a limb's bend between them. A vertex's match is
   //! pruned where its displacement differs by more than `vertex_fit_max_disagreement` node spacings (0: no test) from
