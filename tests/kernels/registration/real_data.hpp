@@ -3,6 +3,8 @@
 //! so vertex i of frame k corresponds to vertex i of frame k + gap. The target is frame k + gap
 //! re-sampled (different connectivity) so that the aligner never sees the correspondence.
 //! Header-only; shared by the registration tests and benchmark.
+#include <Eigen/SVD>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -16,6 +18,7 @@
 #include "io/ply_writer.hpp"
 #include "kernels/eval/drift.hpp"
 #include "kernels/improve/improve.hpp"
+#include "kernels/mesh/edge_graph.hpp"
 #include "kernels/mesh/mesh_convert.hpp"
 #include "kernels/mesh/mesh_queries.hpp"
 #include "kernels/raycast/target_surface.hpp"
@@ -241,6 +244,62 @@ inline void print_parts(std::span<const Vec3> x, const AlignmentPair& pair, cons
     std::printf(" (%.2f %.2f %.2f: %.2f)", u.x(), u.y(), u.z(), 100 * sum[k] / count[k]);
   }
   std::printf("\n");
+}
+
+//! The regions of the source whose vertices are more than `threshold` (a fraction of the diagonal) from their ground
+//! truth, connected over the source's edges: the `shown` largest by summed error, each with its share of the whole
+//! error, its mean error, and the angle and the mean error left by the best rigid motion (Kabsch) from `x` to the truth
+//! over the region: a region turned as a whole leaves little, a distorted one much.
+inline void print_error_regions(std::span<const Vec3> x, const AlignmentPair& pair, double threshold, int shown) {
+  const std::vector<double> err = truth_errors(x, pair.truth, pair.diagonal);
+  const EdgeGraph g = edge_graph(pair.source);
+  std::vector<int> region(err.size(), -1);
+  std::vector<std::vector<Index>> regions;
+  double total = 0;
+  for (std::size_t v = 0; v < err.size(); ++v) {
+    if (pair.source.is_deleted(Vertex(Index(v)))) continue;
+    total += err[v];
+    if (err[v] < threshold || region[v] >= 0) continue;
+    std::vector<Index> stack{Index(v)}, members;
+    region[v] = int(regions.size());
+    while (!stack.empty()) {
+      const Index u = stack.back();
+      stack.pop_back();
+      members.push_back(u);
+      for (Index i = g.offset[u]; i < g.offset[u + 1]; ++i)
+        if (const Index w = g.target[i]; region[w] < 0 && err[w] >= threshold) {
+          region[w] = int(regions.size());
+          stack.push_back(w);
+        }
+    }
+    regions.push_back(std::move(members));
+  }
+  auto summed = [&](const std::vector<Index>& r) {
+    double e = 0;
+    for (const Index v : r) e += err[v];
+    return e;
+  };
+  std::sort(regions.begin(), regions.end(), [&](const auto& a, const auto& b) { return summed(a) > summed(b); });
+  std::printf("    regions above %.2f %% of the diagonal: %zu\n", 100 * threshold, regions.size());
+  const BoundingBox box = bounding_box(pair.source);
+  for (std::size_t k = 0; k < regions.size() && int(k) < shown; ++k) {
+    const std::vector<Index>& r = regions[k];
+    Vec3 cx = Vec3::Zero(), ct = Vec3::Zero(), centre = Vec3::Zero();
+    for (const Index v : r) { cx += x[v]; ct += pair.truth[v]; centre += pair.source.positions()[v]; }
+    cx /= double(r.size()); ct /= double(r.size()); centre /= double(r.size());
+    Eigen::Matrix3d H = Eigen::Matrix3d::Zero();
+    for (const Index v : r) H += (x[v] - cx) * (pair.truth[v] - ct).transpose();
+    Eigen::JacobiSVD<Eigen::Matrix3d> svd(H, Eigen::ComputeFullU | Eigen::ComputeFullV);
+    Eigen::Matrix3d D = Eigen::Matrix3d::Identity();
+    D(2, 2) = (svd.matrixV() * svd.matrixU().transpose()).determinant() < 0 ? -1 : 1;
+    const Eigen::Matrix3d R = svd.matrixV() * D * svd.matrixU().transpose();
+    double left = 0;
+    for (const Index v : r) left += (R * (x[v] - cx) + ct - pair.truth[v]).norm();
+    const Vec3 u = (centre - box.min).cwiseQuotient(box.max - box.min);
+    std::printf("      %zu vertices at (%.2f %.2f %.2f): %.1f %% of the error, mean %.3f %%; best rigid fix turns %.0f deg, "
+                "leaves %.3f %%\n", r.size(), u.x(), u.y(), u.z(), 100 * summed(r) / total, 100 * summed(r) / double(r.size()),
+                std::acos(std::clamp((R.trace() - 1) / 2, -1.0, 1.0)) * 180 / 3.14159265358979, 100 * left / double(r.size()) / pair.diagonal);
+  }
 }
 
 }  // namespace topotrack::test

@@ -187,6 +187,7 @@ Figures run_pair(const std::string& name, int frame, int gap, double edge_factor
                 test::mean_edge_strain(pair.source, pair.truth));
     std::printf("  unaligned"); test::print_parts(pair.source.positions(), pair, parts);
     std::printf("  aligned  "); test::print_parts(mesh.positions(), pair, parts);
+    test::print_error_regions(mesh.positions(), pair, 0.015, 5);
   }
   std::printf("  coarse phases: graph %.3f correspondences %.3f assembly %.3f factorisation %.3f solve %.3f; "
               "pcg %d, factorisations %d, edges %d, last round %zu ok %zu no-hit %zu normal %zu far; fine %zu matched %zu pruned, %d rounds, residual %.5f%%\n",
