@@ -246,6 +246,28 @@ inline void print_parts(std::span<const Vec3> x, const AlignmentPair& pair, cons
   std::printf("\n");
 }
 
+//! The best rigid motion (Kabsch, reflection excluded) taking x[v] to y[v] over the vertices `at`: y ~ R (x - cx) + cy.
+struct RigidFit {
+  Eigen::Matrix3d R = Eigen::Matrix3d::Identity();
+  Vec3 cx = Vec3::Zero(), cy = Vec3::Zero();
+  Vec3 operator()(const Vec3& p) const { return R * (p - cx) + cy; }
+  double angle_deg() const { return std::acos(std::clamp((R.trace() - 1) / 2, -1.0, 1.0)) * 180 / 3.14159265358979; }
+};
+inline RigidFit best_rigid_fit(std::span<const Vec3> x, std::span<const Vec3> y, std::span<const Index> at) {
+  RigidFit f;
+  if (at.empty()) return f;
+  for (const Index v : at) { f.cx += x[v]; f.cy += y[v]; }
+  f.cx /= double(at.size());
+  f.cy /= double(at.size());
+  Eigen::Matrix3d H = Eigen::Matrix3d::Zero();
+  for (const Index v : at) H += (x[v] - f.cx) * (y[v] - f.cy).transpose();
+  Eigen::JacobiSVD<Eigen::Matrix3d> svd(H, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  Eigen::Matrix3d D = Eigen::Matrix3d::Identity();
+  D(2, 2) = (svd.matrixV() * svd.matrixU().transpose()).determinant() < 0 ? -1 : 1;
+  f.R = svd.matrixV() * D * svd.matrixU().transpose();
+  return f;
+}
+
 //! The regions of the source whose vertices are more than `threshold` (a fraction of the diagonal) from their ground
 //! truth, connected over the source's edges: the `shown` largest by summed error, each with its share of the whole
 //! error, its mean error, and the angle and the mean error left by the best rigid motion (Kabsch) from `x` to the truth
@@ -284,21 +306,16 @@ inline void print_error_regions(std::span<const Vec3> x, const AlignmentPair& pa
   const BoundingBox box = bounding_box(pair.source);
   for (std::size_t k = 0; k < regions.size() && int(k) < shown; ++k) {
     const std::vector<Index>& r = regions[k];
-    Vec3 cx = Vec3::Zero(), ct = Vec3::Zero(), centre = Vec3::Zero();
-    for (const Index v : r) { cx += x[v]; ct += pair.truth[v]; centre += pair.source.positions()[v]; }
-    cx /= double(r.size()); ct /= double(r.size()); centre /= double(r.size());
-    Eigen::Matrix3d H = Eigen::Matrix3d::Zero();
-    for (const Index v : r) H += (x[v] - cx) * (pair.truth[v] - ct).transpose();
-    Eigen::JacobiSVD<Eigen::Matrix3d> svd(H, Eigen::ComputeFullU | Eigen::ComputeFullV);
-    Eigen::Matrix3d D = Eigen::Matrix3d::Identity();
-    D(2, 2) = (svd.matrixV() * svd.matrixU().transpose()).determinant() < 0 ? -1 : 1;
-    const Eigen::Matrix3d R = svd.matrixV() * D * svd.matrixU().transpose();
+    Vec3 centre = Vec3::Zero();
+    for (const Index v : r) centre += pair.source.positions()[v];
+    centre /= double(r.size());
+    const RigidFit fit = best_rigid_fit(x, pair.truth, r);
     double left = 0;
-    for (const Index v : r) left += (R * (x[v] - cx) + ct - pair.truth[v]).norm();
+    for (const Index v : r) left += (fit(x[v]) - pair.truth[v]).norm();
     const Vec3 u = (centre - box.min).cwiseQuotient(box.max - box.min);
     std::printf("      %zu vertices at (%.2f %.2f %.2f): %.1f %% of the error, mean %.3f %%; best rigid fix turns %.0f deg, "
                 "leaves %.3f %%\n", r.size(), u.x(), u.y(), u.z(), 100 * summed(r) / total, 100 * summed(r) / double(r.size()),
-                std::acos(std::clamp((R.trace() - 1) / 2, -1.0, 1.0)) * 180 / 3.14159265358979, 100 * left / double(r.size()) / pair.diagonal);
+                fit.angle_deg(), 100 * left / double(r.size()) / pair.diagonal);
   }
 }
 

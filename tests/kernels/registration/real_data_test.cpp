@@ -2,7 +2,6 @@
 // frame k + 15 (large motion), the targets of the registration issue.
 #include <gtest/gtest.h>
 
-#include <Eigen/SVD>
 #include <algorithm>
 #include <cstdio>
 #include <cstdlib>
@@ -60,18 +59,13 @@ Figures run_pair(const std::string& name, int frame, int gap, double edge_factor
   Figures f;
   f.unaligned = test::alignment_error(pair.source, pair.truth, target, pair.diagonal);
   if (std::getenv("TOPOTRACK_TEST_RIGID_TRUTH")) {  // the best rigid fit to the ground truth, for reference
-    Vec3 px = Vec3::Zero(), pc = Vec3::Zero();
-    const auto& P = pair.source.positions();
-    for (std::size_t i = 0; i < P.size(); ++i) { px += P[i]; pc += pair.truth[i]; }
-    px /= double(P.size()); pc /= double(P.size());
-    Eigen::Matrix3d H = Eigen::Matrix3d::Zero();
-    for (std::size_t i = 0; i < P.size(); ++i) H += (P[i] - px) * (pair.truth[i] - pc).transpose();
-    Eigen::JacobiSVD<Eigen::Matrix3d> svd(H, Eigen::ComputeFullU | Eigen::ComputeFullV);
-    Eigen::Matrix3d R = svd.matrixV() * svd.matrixU().transpose();
+    std::vector<Index> all(pair.truth.size());
+    for (std::size_t i = 0; i < all.size(); ++i) all[i] = Index(i);
+    const test::RigidFit fit = test::best_rigid_fit(pair.source.positions(), pair.truth, all);
     double e = 0;
-    for (std::size_t i = 0; i < P.size(); ++i) e += (R * (P[i] - px) + pc - pair.truth[i]).norm();
-    std::printf("  best rigid: error %.4f %%, angle %.1f deg, shift %.4f diag\n", 100 * e / double(P.size()) / pair.diagonal,
-                std::acos(std::clamp((R.trace() - 1) / 2, -1.0, 1.0)) * 180 / 3.14159, (pc - px).norm() / pair.diagonal);
+    for (const Index i : all) e += (fit(pair.source.positions()[i]) - pair.truth[i]).norm();
+    std::printf("  best rigid: error %.4f %%, angle %.1f deg, shift %.4f diag\n", 100 * e / double(all.size()) / pair.diagonal,
+                fit.angle_deg(), (fit.cy - fit.cx).norm() / pair.diagonal);
   }
   SurfaceMesh projected = pair.source.clone();
   project_to_closest(projected, target);
