@@ -4,6 +4,8 @@
 //! re-sampled (different connectivity) so that the aligner never sees the correspondence.
 //! Header-only; shared by the registration tests and benchmark.
 #include <Eigen/SVD>
+#include <Eigen/Eigenvalues>
+#include <Eigen/Geometry>
 
 #include <algorithm>
 #include <cmath>
@@ -271,7 +273,9 @@ inline RigidFit best_rigid_fit(std::span<const Vec3> x, std::span<const Vec3> y,
 //! The regions of the source whose vertices are more than `threshold` (a fraction of the diagonal) from their ground
 //! truth, connected over the source's edges: the `shown` largest by summed error, each with its share of the whole
 //! error, its mean error, and the angle and the mean error left by the best rigid motion (Kabsch) from `x` to the truth
-//! over the region: a region turned as a whole leaves little, a distorted one much.
+//! over the region: a region turned as a whole leaves little, a distorted one much. Also |cos| of the angle between that
+//! motion's axis and the region's longest principal direction (1: turned about its own length, as a limb twisted), and
+//! the region's three principal standard deviations, in diagonals.
 inline void print_error_regions(std::span<const Vec3> x, const AlignmentPair& pair, double threshold, int shown) {
   const std::vector<double> err = truth_errors(x, pair.truth, pair.diagonal);
   const EdgeGraph g = edge_graph(pair.source);
@@ -313,9 +317,16 @@ inline void print_error_regions(std::span<const Vec3> x, const AlignmentPair& pa
     double left = 0;
     for (const Index v : r) left += (fit(x[v]) - pair.truth[v]).norm();
     const Vec3 u = (centre - box.min).cwiseQuotient(box.max - box.min);
-    std::printf("      %zu vertices at (%.2f %.2f %.2f): %.1f %% of the error, mean %.3f %%; best rigid fix turns %.0f deg, "
-                "leaves %.3f %%\n", r.size(), u.x(), u.y(), u.z(), 100 * summed(r) / total, 100 * summed(r) / double(r.size()),
-                fit.angle_deg(), 100 * left / double(r.size()) / pair.diagonal);
+    Eigen::Matrix3d C = Eigen::Matrix3d::Zero();
+    for (const Index v : r) C += (pair.truth[v] - fit.cy) * (pair.truth[v] - fit.cy).transpose();
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(C);
+    const Eigen::AngleAxisd aa(fit.R);
+    const double along = std::abs(aa.axis().dot(eig.eigenvectors().col(2)));
+    const auto sd = [&](int i) { return std::sqrt(std::max(0.0, eig.eigenvalues()(i)) / double(r.size())) / pair.diagonal; };
+    std::printf("      %zu vertices at (%.2f %.2f %.2f): %.1f %% of the error, mean %.3f %%; best rigid fix turns %.0f deg "
+                "(axis along the region %.2f), leaves %.3f %%; extent %.3f %.3f %.3f\n", r.size(), u.x(), u.y(), u.z(),
+                100 * summed(r) / total, 100 * summed(r) / double(r.size()), fit.angle_deg(), along,
+                100 * left / double(r.size()) / pair.diagonal, sd(2), sd(1), sd(0));
   }
 }
 

@@ -37,7 +37,9 @@ struct Figures {
 // TOPOTRACK_TEST_NEAR_PASS_MIN_SPACING=x, TOPOTRACK_TEST_NEAR_PASS_PER_LEVEL=n, TOPOTRACK_TEST_TRUTH_STAGE=full|pass
 // (the ground truth's matches below in the full graph's rounds or in the passes' only), TOPOTRACK_TEST_TRUTH_SKIP_LEVEL=n,
 // TOPOTRACK_TEST_TRUTH_MATCHES=L (each node matched to the closest target point of its ground truth in the
-// first L alpha_reg levels of both stages: what the correspondences cost, docs/results.md).
+// first L alpha_reg levels of both stages: what the correspondences cost, docs/results.md), TOPOTRACK_TEST_TRUTH_BELOW=h
+// (those matches only for the nodes below h of the source's height), TOPOTRACK_TEST_STAGE_REGIONS=1 (with
+// TOPOTRACK_TEST_STAGES: the error regions after every level too).
 // TOPOTRACK_TEST_SOURCE_REFINE=f: the source re-meshed at f of its mean edge length, its ground truth carried along
 // (test::refine_source; the bench's sizes 2-4 are 0.85, 0.563, 0.24).
 void env_double(const char* name, double& value) {
@@ -137,6 +139,7 @@ Figures run_pair(const std::string& name, int frame, int gap, double edge_factor
                           : s.stage == CoarseStage::DenseLevel    ? "dense" : "full";
       std::snprintf(label, sizeof label, "%s a=%g (%d r, fit %.2f)", stage, s.alpha_reg, s.rounds, s.fit_distance);
       test::print_breakdown(label, test::error_breakdown(s.positions, pair, target, truth_index));
+      if (std::getenv("TOPOTRACK_TEST_STAGE_REGIONS")) test::print_error_regions(s.positions, pair, 0.015, 4);
     };
   }
   int truth_levels = 0;
@@ -149,7 +152,12 @@ Figures run_pair(const std::string& name, int frame, int gap, double edge_factor
         if ((std::string(e) == "full") != full) return;
       }
       if (const char* e = std::getenv("TOPOTRACK_TEST_TRUTH_SKIP_LEVEL"); e && round.level == std::atoi(e)) return;
+      const BoundingBox box = bounding_box(pair.source);
+      double below = 2;
+      env_double("TOPOTRACK_TEST_TRUTH_BELOW", below);
       for (std::size_t j = 0; j < round.nodes.size(); ++j) {
+        const Vec3& p0 = pair.source.positions()[round.nodes[j].idx];
+        if ((p0.y() - box.min.y()) / (box.max.y() - box.min.y()) > below) continue;
         const TargetSurface::Hit hit = target.closest_point(pair.truth[round.nodes[j].idx]);
         corr[j].status = CorrespondenceStatus::Ok;
         corr[j].point = hit.point;
