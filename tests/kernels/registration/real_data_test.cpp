@@ -11,6 +11,7 @@
 
 #include "kernels/registration/coarse.hpp"
 #include "kernels/registration/fine.hpp"
+#include "kernels/registration/intrinsic_matches.hpp"
 #include "kernels/registration/large_motion.hpp"
 #include "kernels/registration/projection.hpp"
 #include "tests/kernels/registration/real_data.hpp"
@@ -48,6 +49,8 @@ void env_double(const char* name, double& value) {
 void env_int(const char* name, int& value) {
   if (const char* e = std::getenv(name)) value = std::atoi(e);
 }
+
+
 
 int last_rounds = 0;       // rounds of the last run_pair
 CoarseReport last_coarse;  // its coarse report
@@ -183,6 +186,36 @@ Figures run_pair(const std::string& name, int frame, int gap, double edge_factor
   const FineReport fr = align_fine(mesh, target, fine);
   f.aligned = test::alignment_error(mesh, pair.truth, target, pair.diagonal);
   if (const char* e = std::getenv("TOPOTRACK_TEST_WRITE_ERRORS")) test::write_error_meshes(e, pair, mesh.positions());
+  // TOPOTRACK_TEST_INTRINSIC_PRECISION=s: how far from its ground truth the intrinsic matches place each node of a
+  // Poisson-disk sampling at s diagonals, with the anchors (and nodes) at their ground truth and at the result.
+  if (const char* e = std::getenv("TOPOTRACK_TEST_INTRINSIC_PRECISION")) {
+    const EdgeGraph rest = edge_graph(pair.source);
+    const EdgeGraph tg = edge_graph(target.positions(), target.triangles());
+    const double spacing = std::atof(e) * pair.diagonal;
+    const std::vector<Index> nodes = poisson_disk_samples(rest, spacing);
+    std::vector<Vec3> x0(nodes.size());
+    for (std::size_t j = 0; j < nodes.size(); ++j) x0[j] = pair.source.positions()[nodes[j]];
+    const IntrinsicAnchors anchors = intrinsic_anchors(rest, nodes, x0, params.intrinsic.anchors);
+    IntrinsicParams ip = params.intrinsic;
+    ip.misplaced_spacings = 0;
+    for (int which = 0; which < 2; ++which) {
+      const auto& at = which == 0 ? pair.truth : mesh.positions();
+      std::vector<Vec3> ax(anchors.anchor.size()), nx(nodes.size());
+      for (std::size_t a = 0; a < ax.size(); ++a) ax[a] = at[anchors.anchor[a]];
+      for (std::size_t j = 0; j < nodes.size(); ++j) nx[j] = at[nodes[j]];
+      const IntrinsicMatches im = intrinsic_matches(anchors, ax, nodes, nx, target, tg, spacing, ip);
+      std::vector<double> err;
+      for (std::size_t j = 0; j < nodes.size(); ++j)
+        if (im.match[j].valid()) err.push_back((im.match[j].point - pair.truth[nodes[j]]).norm() / pair.diagonal);
+      std::sort(err.begin(), err.end());
+      double mean = 0;
+      for (double v : err) mean += v;
+      std::printf("  intrinsic places, anchors at the %s: %zu of %zu nodes placed, kept %zu of %zu anchors, scale %.3f; "
+                  "error mean %.3f %% median %.3f %% p90 %.3f %%\n", which == 0 ? "ground truth" : "result", err.size(),
+                  nodes.size(), im.kept, im.anchors, im.scale, 100 * mean / double(std::max<std::size_t>(1, err.size())),
+                  err.empty() ? 0.0 : 100 * err[err.size() / 2], err.empty() ? 0.0 : 100 * err[err.size() * 9 / 10]);
+    }
+  }
   if (stages) {
     test::print_breakdown("fine", test::error_breakdown(mesh.positions(), pair, target, truth_index));
     std::printf("  edge strain |l' - l| / l: aligned %.4f, ground truth %.4f\n", test::mean_edge_strain(pair.source, mesh.positions()),
