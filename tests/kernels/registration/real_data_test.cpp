@@ -40,7 +40,9 @@ struct Figures {
 // TOPOTRACK_TEST_TRUTH_MATCHES=L (each node matched to the closest target point of its ground truth in the
 // first L alpha_reg levels of both stages: what the correspondences cost, docs/results.md), TOPOTRACK_TEST_TRUTH_BELOW=h
 // (those matches only for the nodes below h of the source's height), TOPOTRACK_TEST_STAGE_REGIONS=1 (with
-// TOPOTRACK_TEST_STAGES: the error regions after every level too).
+// TOPOTRACK_TEST_STAGES: the error regions after every level too), TOPOTRACK_TEST_STRAIN=1 (the mean edge strain against
+// the source after the coarse stage and at the end, and the distance to the target: measures without the ground truth;
+// TOPOTRACK_TEST_HISTORY also prints the full graph's first and last energies).
 // TOPOTRACK_TEST_SOURCE_REFINE=f: the source re-meshed at f of its mean edge length, its ground truth carried along
 // (test::refine_source; the bench's sizes 2-4 are 0.85, 0.563, 0.24).
 void env_double(const char* name, double& value) {
@@ -183,6 +185,7 @@ Figures run_pair(const std::string& name, int frame, int gap, double edge_factor
   env_double("TOPOTRACK_TEST_FINE_MORE_TOLERANCE", fine.more_rounds_tolerance);
   env_double("TOPOTRACK_TEST_FINE_NORMAL_ANGLE", fine.max_normal_angle_deg);
   if (const char* e = std::getenv("TOPOTRACK_TEST_FINE_NORMAL_DISPLACEMENT")) fine.normal_displacement = std::atoi(e) != 0;
+  const double coarse_strain = test::mean_edge_strain(pair.source, mesh.positions());
   const FineReport fr = align_fine(mesh, target, fine);
   f.aligned = test::alignment_error(mesh, pair.truth, target, pair.diagonal);
   if (const char* e = std::getenv("TOPOTRACK_TEST_WRITE_ERRORS")) test::write_error_meshes(e, pair, mesh.positions());
@@ -235,10 +238,15 @@ Figures run_pair(const std::string& name, int frame, int gap, double edge_factor
               name.c_str(), frame, frame + gap, c.nodes, c.iterations, c.levels, c.alpha_reg_end, fr.cg_iterations,
               100 * f.unaligned.mean_truth, 100 * f.projected.mean_truth, 100 * f.aligned.mean_truth,
               100 * f.projected.mean_target, 100 * f.aligned.mean_target, c.seconds_total, fr.seconds_total);
+  if (std::getenv("TOPOTRACK_TEST_STRAIN"))  // a measure of the result that needs no ground truth
+    std::printf("  strain %.5f (ground truth %.5f), distance to target %.5f %%, strain after the coarse stage %.5f\n",
+                test::mean_edge_strain(pair.source, mesh.positions()), test::mean_edge_strain(pair.source, pair.truth),
+                100 * f.aligned.mean_target, coarse_strain);
   if (std::getenv("TOPOTRACK_TEST_HISTORY")) {
     std::printf("  rounds (alpha_reg, fit distance in edges, correspondences, motion):");
     for (const CoarseRound& r : c.rounds) std::printf(" [%g %.2f %zu %.2f]", r.alpha_reg, r.fit_distance, r.correspondences, r.motion);
-    std::printf("\n  mean node fit distance %.4f mean edge lengths\n", c.mean_fit_distance / mean_edge_length(pair.source));
+    std::printf("\n  mean node fit distance %.4f mean edge lengths; energy %.6g -> %.6g, E_fit %.6g -> %.6g\n",
+                c.mean_fit_distance / mean_edge_length(pair.source), c.energy_start, c.energy_end, c.fit_start, c.fit_end);
   }
   last_rounds = c.iterations;
   last_coarse = c;
