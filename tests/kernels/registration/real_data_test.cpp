@@ -38,7 +38,10 @@ struct Figures {
 // TOPOTRACK_TEST_NEAR_PASS_MIN_SPACING=x, TOPOTRACK_TEST_NEAR_PASS_PER_LEVEL=n, TOPOTRACK_TEST_TRUTH_STAGE=full|pass
 // (the ground truth's matches below in the full graph's rounds or in the passes' only), TOPOTRACK_TEST_TRUTH_SKIP_LEVEL=n,
 // TOPOTRACK_TEST_TRUTH_MATCHES=L (each node matched to the closest target point of its ground truth in the
-// first L alpha_reg levels of both stages: what the correspondences cost, docs/results.md), TOPOTRACK_TEST_TRUTH_BELOW=h
+// first L alpha_reg levels of both stages: what the correspondences cost, docs/results.md; the backward matches and the
+// intrinsic guide still act beside or over them, so the floor of the representation needs TOPOTRACK_TEST_BACKWARD_WEIGHT=0
+// TOPOTRACK_TEST_INTRINSIC=0 TOPOTRACK_TEST_INTRINSIC_PASSES=0 as well), TOPOTRACK_TEST_TRUTH_TO_TARGET=1 (the ground
+// truth's mean distance to the re-sampled target), TOPOTRACK_TEST_TRUTH_BELOW=h
 // (those matches only for the nodes below h of the source's height), TOPOTRACK_TEST_STAGE_REGIONS=1 (with
 // TOPOTRACK_TEST_STAGES: the error regions after every level too), TOPOTRACK_TEST_STRAIN=1 (the mean edge strain against
 // the source after the coarse stage and at the end, and the distance to the target: measures without the ground truth;
@@ -73,6 +76,12 @@ Figures run_pair(const std::string& name, int frame, int gap, double edge_factor
     for (const Index i : all) e += (fit(pair.source.positions()[i]) - pair.truth[i]).norm();
     std::printf("  best rigid: error %.4f %%, angle %.1f deg, shift %.4f diag\n", 100 * e / double(all.size()) / pair.diagonal,
                 fit.angle_deg(), (fit.cy - fit.cx).norm() / pair.diagonal);
+  }
+  if (std::getenv("TOPOTRACK_TEST_TRUTH_TO_TARGET")) {  // how far the ground truth lies from the re-sampled target
+    SurfaceMesh at_truth = pair.source.clone();
+    at_truth.positions() = pair.truth;
+    const test::AlignmentError t = test::alignment_error(at_truth, pair.truth, target, pair.diagonal);
+    std::printf("  ground truth to the target: mean %.4f %% of the diagonal\n", 100 * t.mean_target);
   }
   SurfaceMesh projected = pair.source.clone();
   project_to_closest(projected, target);
