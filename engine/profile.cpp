@@ -96,6 +96,7 @@ std::vector<Binding> bindings(TrackerParams& p) {
       {"coarse.min_nodes", &p.coarse_params.min_nodes, 0, 1e7},
       {"coarse.min_node_spacing_factor", &p.coarse_params.min_node_spacing_factor, 1e-3, 1e3},
       {"coarse.vertex_fit_weight", &p.coarse_params.vertex_fit_weight, 0, inf},
+      {"coarse.backward_vertex_weight", &p.coarse_params.backward_vertex_weight, 0, inf},
       {"coarse.vertex_fit_spacing", &p.coarse_params.vertex_fit_spacing, 0, 1e3},
       {"coarse.vertex_fit_max_disagreement", &p.coarse_params.vertex_fit_max_disagreement, 0, inf},
       // Speed between consecutive frames (our additions, kernels/registration/coarse.hpp).

@@ -111,6 +111,7 @@ nlohmann::json run_coarse(SurfaceMesh& mesh, const TargetSurface& target, const 
                      {"intrinsic_misplaced", r.intrinsic_full_graph_misplaced},
                      {"backward", r.backward},
                      {"backward_all", r.backward_all},
+                     {"backward_at_vertices", r.backward_at_vertices},
                      {"fitted_at_start", r.fitted_at_start},
                      {"prealign", {{"applied", r.prealigned},
                                    {"iterations", r.prealign.iterations},

@@ -171,6 +171,9 @@ struct VertexFit {
   std::vector<Vec3> slot_offset;        // likewise x_v - g_t
   std::vector<Vec3> rest_normal;        // per vertex, of the rest mesh (angle-weighted)
   std::vector<Correspondence> match;    // per vertex, this round (invalid: no term)
+  std::vector<Correspondence> back;     // per vertex, its backward match this round (empty: none; backward_vertex_weight)
+  double back_scale = 0;                // its weight relative to `match`'s
+  bool active(std::size_t q) const { return match[q].valid() || (!back.empty() && back[q].valid()); }
   std::vector<Vec3> x;                  // per vertex, skinned by the current state
   double weight = 0;                    // of a vertex's term relative to a node's
   bool empty() const { return vertex.empty(); }
@@ -232,6 +235,7 @@ double vertex_fit_energy(const Problem& p, const std::vector<NodeState>& s, cons
     for (std::size_t q = r.begin(); q != r.end(); ++q) {
       x[q] = skin(p, s, f.vertex[q].idx);
       e[q] = fit_energy(x[q], f.match[q], w);
+      if (!f.back.empty()) e[q] += f.back_scale * fit_energy(x[q], f.back[q], w);
     }
   });
   double sum = 0;
@@ -354,9 +358,16 @@ void assemble(const Problem& p, const std::vector<NodeState>& s, const NodeMatch
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, vertex_matrix.size(), 1024), [&](const auto& r) {
     for (std::size_t q = r.begin(); q != r.end(); ++q) {
       const Correspondence& c = vertices->match[q];
-      if (!c.valid()) continue;
-      vertex_matrix[q] = fit_matrix(c, w, vertices->weight);
-      vertex_residual[q] = vertex_matrix[q] * (vertices->x[q] - c.point);
+      if (c.valid()) {
+        vertex_matrix[q] = fit_matrix(c, w, vertices->weight);
+        vertex_residual[q] = vertex_matrix[q] * (vertices->x[q] - c.point);
+      }
+      if (!vertices->back.empty() && vertices->back[q].valid()) {
+        const Correspondence& b = vertices->back[q];
+        const Mat3 M = fit_matrix(b, w, vertices->weight * vertices->back_scale);
+        vertex_matrix[q] += M;
+        vertex_residual[q] += M * (vertices->x[q] - b.point);
+      }
     }
   });
   grad.setZero(Eigen::Index(12 * nn));
@@ -439,7 +450,7 @@ void assemble(const Problem& p, const std::vector<NodeState>& s, const NodeMatch
       if (vertices)
         for (Index e = vertices->node_offset[j]; e < vertices->node_offset[j + 1]; ++e) {
           const std::size_t slot = vertices->entry_slot[e], q = slot / K;
-          if (!vertices->match[q].valid()) continue;
+          if (!vertices->active(q)) continue;
           const double wt = vertices->slot_weight[slot];
           const Vec3& o = vertices->slot_offset[slot];
           const Eigen::Vector4d u(o.x(), o.y(), o.z(), 1);
@@ -475,7 +486,7 @@ void assemble(const Problem& p, const std::vector<NodeState>& s, const NodeMatch
         if (!vertices) return;
         for (Index e = vertices->node_offset[j]; e < vertices->node_offset[j + 1]; ++e) {
           const std::size_t slot = vertices->entry_slot[e], q = slot / K;
-          if (!vertices->match[q].valid()) continue;
+          if (!vertices->active(q)) continue;
           const Index v = vertices->vertex[q].idx;
           const Vec3& oj = vertices->slot_offset[slot];
           const Eigen::Vector4d uj = vertices->slot_weight[slot] * Eigen::Vector4d(oj.x(), oj.y(), oj.z(), 1);
@@ -558,7 +569,7 @@ void apply_system(const DeformationGraph& g, const NodeSystem& sys, const Eigen:
     sys.vertex_product.resize(vf->vertex.size());
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, vf->vertex.size(), 1024), [&](const auto& r) {
       for (std::size_t q = r.begin(); q != r.end(); ++q) {
-        if (!vf->match[q].valid()) {
+        if (!vf->active(q)) {
           sys.vertex_product[q].setZero();
           continue;
         }
@@ -995,6 +1006,9 @@ CoarseReport align_coarse_impl(SurfaceMesh& mesh, const TargetSurface& target, c
   std::vector<Correspondence> corr, back;
   const TargetSamples samples =
       backward ? sample_target(target, std::size_t(params.backward_samples_per_node) * nn) : TargetSamples{};
+  // CoarseParams::backward_vertex_weight: every node's backward matches made at the fitted vertices instead.
+  const bool backward_at_vertices = backward_all && !vertex_fit.empty() && params.backward_vertex_weight > 0;
+  rep.backward_at_vertices = backward_at_vertices;
   Eigen::VectorXd grad;
   double alpha_reg = params.alpha_reg_start;
   if (rep.coarse_pass_iterations > 0 && params.alpha_reg_start_after_pass > 0) alpha_reg = params.alpha_reg_start_after_pass;
@@ -1017,8 +1031,9 @@ CoarseReport align_coarse_impl(SurfaceMesh& mesh, const TargetSurface& target, c
     cparams.closest_point = large_motion && rep.levels <= params.closest_point_levels;
     corr = find_correspondences(target, node_x, node_n, cparams);
     if (params.match_override) params.match_override(CoarseMatchRound{CoarseStage::Level, rep.levels, graph.node_vertex}, corr);
-    if (backward) back = find_backward_correspondences(samples, node_x, node_n, params.max_normal_angle_deg);
-    if (backward && !backward_all)
+    const bool node_backward = backward && !backward_at_vertices;
+    if (node_backward) back = find_backward_correspondences(samples, node_x, node_n, params.max_normal_angle_deg);
+    if (node_backward && !backward_all)
       for (std::size_t j = 0; j < nn; ++j)
         if (corr[j].valid()) back[j] = Correspondence{};
     if (guide)  // a guided node follows its given match alone
@@ -1026,7 +1041,7 @@ CoarseReport align_coarse_impl(SurfaceMesh& mesh, const TargetSurface& target, c
         if (guide->match[j].valid()) {
           corr[j] = guide->match[j];
           corr[j].distance = (node_x[j] - corr[j].point).norm();
-          if (backward) back[j] = Correspondence{};
+          if (node_backward) back[j] = Correspondence{};
         }
     const bool fit_vertices = !vertex_fit.empty();
     if (fit_vertices) {  // the vertices' matches along their normals (blended_normal), pruned like the nodes'
@@ -1064,13 +1079,19 @@ CoarseReport align_coarse_impl(SurfaceMesh& mesh, const TargetSurface& target, c
           }
         });
       }
+      if (backward_at_vertices) {  // the target's samples matched to the nearest fitted vertices instead of the nodes
+        vertex_fit.back = find_backward_correspondences(samples, vertex_fit.x, vertex_n, params.max_normal_angle_deg);
+        vertex_fit.back_scale = params.backward_vertex_weight;
+      }
       if (guide) {  // a vertex a guided node skins is left to the node's match
         const auto K = std::size_t(graph.k);
         for (std::size_t q = 0; q < vertex_fit.vertex.size(); ++q)
           for (std::size_t t = 0; t < K; ++t)
             if (const Index j = graph.influence_node[vertex_fit.vertex[q].idx * K + t];
-                j != kInvalidIndex && guide->match[j].valid())
+                j != kInvalidIndex && guide->match[j].valid()) {
               vertex_fit.match[q] = Correspondence{};
+              if (!vertex_fit.back.empty()) vertex_fit.back[q] = Correspondence{};
+            }
       }
     }
     rep.seconds_correspondences += seconds_since(t0);

@@ -216,6 +216,12 @@ struct CoarseParams {
   //! instead of 0.019% with every node (the node means of the target samples slide the nodes
   //! tangentially, frame after frame), hence `backward_all_misfit` above consecutive-frame motion.
   double backward_weight = 10;
+  //! Where every node gets backward matches (the misfit above `backward_all_misfit`) and the vertices are fitted
+  //! (vertex_fit_weight), the full graph matches the target's samples to the nearest fitted vertices instead of the
+  //! nodes, each vertex's backward term weighted this much relative to its forward one (our addition; 0: at the nodes,
+  //! the default and the tracker's). A node's backward match is the mean of the samples nearest to it, a patch about
+  //! a node spacing across; a fitted vertex's patch is half that. `topotrack align` takes kLargeMotionBackwardVertexWeight.
+  double backward_vertex_weight = 0;
   double backward_misfit = 0.003;
   double backward_all_misfit = 0.03;
   int backward_samples_per_node = 16;
@@ -325,6 +331,12 @@ inline constexpr double kLargeMotionAlphaRegStartWithoutPass = 10;
 //! disagreement test samba frame 5 -> 20 lost a limb to another part with weight 1 and 10 (1.0-1.2 % instead of 0.23 %),
 //! and also when the vertices waited for alpha_reg 1 or 0.1; a test at 0.25 / 0.5 spacings: elephant 8.36 / 8.16, pcow
 //! 27.45 / 27.00. In the low-density passes too (0.5): samba 1.616, elephant 9.56, pcow 26.62.
+//! CoarseParams::backward_vertex_weight for `topotrack align`. Measured (ten-run sums as above; "other pairs": pcow
+//! k = 2, 4, ..., 20 and the elephant k = 2, 4, 6, 8 at 0.8; docs/results.md 2026-12-04): pcow 26.351 -> 25.726, other
+//! pairs 28.773 -> 27.803, k = 21, 25, ..., 57 171.36 -> 170.92; frame 1 -> 16 median 2.28 -> 2.40 %. Weight 2 / 3 / 5
+//! with the guided nodes' vertices keeping their backward matches: 24.84 / 24.79 / 24.85, other pairs 28.34 / 28.01 /
+//! 28.90. Samba and the elephant (backward matches at the pruned nodes only) are unchanged, bit for bit.
+inline constexpr double kLargeMotionBackwardVertexWeight = 3;
 inline constexpr double kLargeMotionVertexFitWeight = 10;
 inline constexpr double kLargeMotionVertexFitSpacing = 0.5;
 inline constexpr double kLargeMotionVertexFitMaxDisagreement = 1;
@@ -373,6 +385,7 @@ struct CoarseReport {
   bool prealigned = false;          //!< the rigid pre-alignment ran and was applied
   bool backward = false;            //!< the misfit called for the backward correspondences (pruned nodes)
   bool backward_all = false;        //!< ... at every node
+  bool backward_at_vertices = false;  //!< ... made at the fitted vertices instead (backward_vertex_weight)
   int coarse_pass_iterations = 0;   //!< rounds of the low-density pass, guided ones included (0: it did not run)
   int intrinsic_passes = 0;         //!< low-density passes run again with intrinsic matches
   std::size_t intrinsic_misplaced = 0;  //!< the pass's nodes found misplaced after it (intrinsic_passes > 0)

@@ -7,7 +7,8 @@
 //! the pass (kLargeMotionAlphaRegStartAfterPass, kLargeMotionAlphaRegStartWithoutPass, kLargeMotionAlphaRegMin,
 //! kLargeMotionFitTolerance and kLargeMotionCheckFitFirstTolerance), a pair within the normal rays' reach ends on a
 //! denser graph (kLargeMotionDenseSpacingFactor), a mesh of few vertices gets a graph of enough nodes
-//! (kLargeMotionMinNodes), the full graph also fits sampled vertices (kLargeMotionVertexFitWeight), and the fine stage takes
+//! (kLargeMotionMinNodes), the full graph also fits sampled vertices (kLargeMotionVertexFitWeight) and, where every node
+//! would get backward matches, makes them at those vertices (kLargeMotionBackwardVertexWeight), and the fine stage takes
 //! further rounds (kLargeMotionFineRounds). The rigid pre-alignment, the low-density pass and the backward matches are
 //! library defaults already, gated by the measured misfit. One place for the tool, the tests and the bench.
 #include "kernels/registration/coarse.hpp"
@@ -29,6 +30,7 @@ inline void use_large_motion_alignment(CoarseParams& coarse, FineParams& fine) {
   coarse.vertex_fit_weight = kLargeMotionVertexFitWeight;
   coarse.vertex_fit_spacing = kLargeMotionVertexFitSpacing;
   coarse.vertex_fit_max_disagreement = kLargeMotionVertexFitMaxDisagreement;
+  coarse.backward_vertex_weight = kLargeMotionBackwardVertexWeight;
   fine.max_rounds = kLargeMotionFineRounds;
 }
 

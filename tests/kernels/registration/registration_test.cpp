@@ -890,6 +890,52 @@ TEST(Alignment, MinNodesGivesASmallMeshEnoughNodes) {
   EXPECT_EQ(CoarseParams{}.min_nodes, 0);
 }
 
+// CoarseParams::backward_vertex_weight: where every node would get backward matches, `align` makes them at the fitted
+// vertices instead; nowhere else, and not in the library's defaults.
+TEST(Alignment, BackwardMatchesAtTheFittedVerticesWhereEveryNodeGetsThem) {
+  const Eigen::Matrix3d R = rotation(70, Vec3(0.2, 1, 0.4));
+  auto transform = [&](const Vec3& p) { return Vec3(R * p + Vec3(0.6, -0.3, 0.2)); };
+  auto run = [&](double weight, double vertex_fit, CoarseReport* report) {
+    Case c = make_case(transform);
+    CoarseParams q;
+    FineParams f;
+    use_large_motion_alignment(q, f);
+    q.backward_vertex_weight = weight;
+    q.vertex_fit_weight = vertex_fit;
+    q.check_fit_first = false;  // the full graph runs its rounds (else the pass may leave it fitted at the start)
+    *report = align_coarse(c.source, c.target, q);
+    double error = 0;
+    for (std::size_t i = 0; i < c.truth.size(); ++i) error += (c.source.positions()[i] - c.truth[i]).norm();
+    return std::make_pair(c.source.positions(), error / double(c.truth.size()) / c.target.bbox_diagonal());
+  };
+  CoarseReport at_nodes, at_vertices, unfitted;
+  const auto [x_nodes, e_nodes] = run(0, kLargeMotionVertexFitWeight, &at_nodes);
+  const auto [x_vertices, e_vertices] = run(kLargeMotionBackwardVertexWeight, kLargeMotionVertexFitWeight, &at_vertices);
+  run(kLargeMotionBackwardVertexWeight, 0, &unfitted);
+  EXPECT_TRUE(at_nodes.backward_all);
+  EXPECT_FALSE(at_nodes.backward_at_vertices);
+  EXPECT_TRUE(at_vertices.backward_at_vertices);
+  EXPECT_FALSE(unfitted.backward_at_vertices);  // no fitted vertices: at the nodes
+  EXPECT_NE(x_nodes, x_vertices);
+  EXPECT_LT(e_vertices, 0.01);
+  EXPECT_LT(e_nodes, 0.01);
+  // Below the every-node misfit the pruned nodes keep theirs: nothing changes.
+  const Eigen::Matrix3d R2 = rotation(8, Vec3(1, 1, 0));
+  for (const double weight : {0.0, kLargeMotionBackwardVertexWeight}) {
+    Case c = make_case([&](const Vec3& p) { return Vec3(R2 * p); });
+    CoarseParams q;
+    FineParams f;
+    use_large_motion_alignment(q, f);
+    q.backward_vertex_weight = weight;
+    EXPECT_FALSE(align_coarse(c.source, c.target, q).backward_at_vertices);
+  }
+  CoarseParams q;
+  FineParams f;
+  use_large_motion_alignment(q, f);
+  EXPECT_EQ(q.backward_vertex_weight, kLargeMotionBackwardVertexWeight);
+  EXPECT_EQ(CoarseParams{}.backward_vertex_weight, 0);
+}
+
 TEST(Alignment, OneAndTwoThreadsGiveIdenticalResults) {
   auto run = [](int threads) {
     tbb::task_arena arena(threads);
@@ -915,6 +961,7 @@ TEST(Alignment, OneAndTwoThreadsGiveIdenticalResults) {
       q.check_fit_first = false;  // the first pass runs its rounds (else it may find itself fitted, with no graph)
       const double e_edge = mean_edge_length(e.source);
       const CoarseReport er = align_coarse(e.source, e.target, q);
+      EXPECT_TRUE(er.backward_at_vertices);  // the misfit gives every node backward matches: at the vertices
       EXPECT_LT(er.node_spacing, 3 * e_edge);  // min_nodes: the blob's few vertices
       EXPECT_EQ(er.intrinsic_passes, 1);
       EXPECT_EQ(er.low_density.rounds, er.coarse_pass_iterations);
