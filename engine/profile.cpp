@@ -69,6 +69,7 @@ std::vector<Binding> bindings(TrackerParams& p) {
       {"coarse.graph_density", &p.coarse_params.graph_density, 1e-3, 1e3},
       // Large motion (our additions before §4.2's scheme, gated by the misfit; kernels/registration/coarse.hpp).
       {"coarse.prealign_misfit", &p.coarse_params.prealign_misfit, 0, 1},
+      {"coarse.prealign_axes_win_ratio", &p.coarse_params.prealign.axes_win_ratio, 0, 1},
       {"coarse.coarse_pass_misfit", &p.coarse_params.coarse_pass_misfit, 0, 1},
       {"coarse.coarse_pass_density", &p.coarse_params.coarse_pass_density, 1e-3, 1},
       {"coarse.coarse_pass_alpha_reg_min", &p.coarse_params.coarse_pass_alpha_reg_min, 1e-12, inf},

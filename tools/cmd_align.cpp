@@ -115,6 +115,8 @@ nlohmann::json run_coarse(SurfaceMesh& mesh, const TargetSurface& target, const 
                      {"fitted_at_start", r.fitted_at_start},
                      {"prealign", {{"applied", r.prealigned},
                                    {"iterations", r.prealign.iterations},
+                                   {"axes_starts", r.prealign.axes_starts},
+                                   {"axes_won", r.prealign.axes_won},
                                    {"distance_start", r.prealign.distance_start},
                                    {"distance_end", r.prealign.distance_end}}},
                      {"low_density", phases_json(r.low_density)},

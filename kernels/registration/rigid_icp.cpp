@@ -9,7 +9,10 @@
 #include <cmath>
 #include <limits>
 #include <numbers>
+#include <span>
 #include <vector>
+
+#include <Eigen/Eigenvalues>
 
 #include "kernels/mesh/mesh_queries.hpp"
 
@@ -155,6 +158,21 @@ Vec3 area_centroid(const SurfaceMesh& mesh) {
   return area > 0 ? Vec3(c / area) : c;
 }
 
+// The principal axes of the triangles' areas (second moments about the area-weighted centroid `c`), columns by
+// decreasing extent.
+Mat3 principal_axes(std::span<const Vec3> P, std::span<const std::array<Index, 3>> F, const Vec3& c) {
+  Mat3 M = Mat3::Zero();
+  for (const auto& f : F) {
+    const double a = 0.5 * (P[f[1]] - P[f[0]]).cross(P[f[2]] - P[f[0]]).norm();
+    const Vec3 m = (P[f[0]] + P[f[1]] + P[f[2]]) / 3.0 - c;
+    M += a * m * m.transpose();
+  }
+  const Eigen::SelfAdjointEigenSolver<Mat3> eig(M);  // ascending eigenvalues
+  Mat3 axes = eig.eigenvectors().rowwise().reverse();
+  if (axes.determinant() < 0) axes.col(2) = -axes.col(2);
+  return axes;
+}
+
 struct Run {
   Rigid T;
   double score = std::numeric_limits<double>::infinity();
@@ -198,7 +216,8 @@ Run icp(const Samples& s, Rigid T, const TargetSurface& target, const RigidIcpPa
 void validate(const RigidIcpParams& params) {
   if (!(params.trim_fraction > 0) || params.trim_fraction > 1 || params.max_iterations < 0 ||
       !(params.tolerance >= 0) || !(params.score_tolerance >= 0) || params.max_samples < 3 ||
-      std::isnan(params.max_normal_angle_deg) || !(params.point_weight >= 0) || !(params.plane_weight >= 0) ||
+      std::isnan(params.max_normal_angle_deg) || !(params.axes_win_ratio >= 0) || params.axes_win_ratio > 1 ||
+      !(params.point_weight >= 0) || !(params.plane_weight >= 0) ||
       !(params.point_weight + params.plane_weight > 0))
     TT_THROW(InvalidInput, "rigid ICP: invalid parameters");
 }
@@ -225,6 +244,34 @@ RigidIcpReport align_rigid(SurfaceMesh& mesh, const TargetSurface& target, const
     const Run run = icp(s, shift, target, params);
     rep.iterations += run.iterations;
     if (run.score < best.score) best = run;
+  }
+  if (params.axes_win_ratio > 0) {
+    // The source's principal axes turned onto the target's, in each of the four proper ways (the axes' signs are
+    // arbitrary), about the centroids matched; their best end wins only by the margin.
+    std::vector<std::array<Index, 3>> faces;
+    std::vector<Vec3> points(mesh.positions().begin(), mesh.positions().end());
+    for (std::size_t fi = 0; fi < mesh.faces_size(); ++fi) {
+      const Face f{Index(fi)};
+      if (mesh.is_deleted(f)) continue;
+      const Halfedge h = mesh.halfedge(f);
+      faces.push_back({mesh.to_vertex(mesh.prev(h)).idx, mesh.to_vertex(h).idx, mesh.to_vertex(mesh.next(h)).idx});
+    }
+    const Vec3 cs = area_centroid(points, faces), ct = area_centroid(target.positions(), target.triangles());
+    const Mat3 As = principal_axes(points, faces, cs), At = principal_axes(target.positions(), target.triangles(), ct);
+    Run axes;
+    for (const Vec3& sign : {Vec3(1, 1, 1), Vec3(1, -1, -1), Vec3(-1, 1, -1), Vec3(-1, -1, 1)}) {
+      Rigid start;
+      start.R = At * sign.asDiagonal() * As.transpose();
+      start.t = ct - start.R * cs;
+      const Run run = icp(s, start, target, params);
+      rep.iterations += run.iterations;
+      ++rep.axes_starts;
+      if (run.score < axes.score) axes = run;
+    }
+    if (axes.score <= params.axes_win_ratio * best.score) {
+      best = axes;
+      rep.axes_won = true;
+    }
   }
   rep.distance_end = rep.distance_start;
   if (best.score < rep.distance_start) {

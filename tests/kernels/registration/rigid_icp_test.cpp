@@ -51,6 +51,49 @@ TEST(RigidIcp, RecoversLargeRigidMotion) {
   c.source.validate();
 }
 
+// RigidIcpParams::axes_win_ratio: a turn beyond ICP's reach from the identity and the centroids is found from the
+// principal axes matched; without those starts it is not; and where the two starts already fit, the axes' end (the
+// same pose, about as close) does not replace theirs.
+TEST(RigidIcp, PrincipalAxesStartsFindATurnBeyondIcpsReach) {
+  const Eigen::Matrix3d R = rotation(160, Vec3(0.3, 1, 0.2));
+  const Vec3 t(1.5, -0.8, 0.6);
+  // The blob made lopsided along distinct axes (a symmetric shape fits turned as well as in place).
+  const auto shape = [](const Vec3& p) { return Vec3(1.8 * p.x() + 0.4 * p.y() * p.y(), p.y() + 0.3 * p.z() * p.z(), 0.6 * p.z()); };
+  const test::Soup src = test::blob(4);
+  test::Soup tgt = test::blob(5);
+  std::vector<Vec3> truth, source_positions;
+  for (const Vec3& q : src.positions) {
+    source_positions.push_back(shape(q));
+    truth.push_back(R * shape(q) + t);
+  }
+  for (Vec3& q : tgt.positions) q = R * shape(q) + t;
+  test::Soup moved = src;
+  moved.positions = source_positions;
+  Case c{moved.mesh(), truth, TargetSurface(tgt.positions, tgt.triangles)};
+  const double diag = c.target.bbox_diagonal();
+  RigidIcpParams p;
+  p.axes_win_ratio = 0;
+  SurfaceMesh without = c.source.clone();
+  const RigidIcpReport r0 = align_rigid(without, c.target, p);
+  EXPECT_EQ(r0.axes_starts, 0);
+  EXPECT_GT(mean_error(without, c.truth), 0.05 * diag);  // the two starts settle on a wrong pose
+  const RigidIcpReport r = align_rigid(c.source, c.target);
+  EXPECT_EQ(r.axes_starts, 4);
+  EXPECT_TRUE(r.axes_won);
+  EXPECT_LT(r.distance_end, r0.distance_end);
+  EXPECT_LT((r.rotation - R).norm(), 0.02);
+  EXPECT_LT(mean_error(c.source, c.truth), 0.005 * diag);
+  // A pair the two starts already fit keeps their end, bit for bit.
+  Case d = make_case(rotation(60, Vec3(0.3, 1, 0.2)), Vec3(0.8, -0.4, 0.3));
+  SurfaceMesh d0 = d.source.clone();
+  align_rigid(d0, d.target, p);
+  const RigidIcpReport rd = align_rigid(d.source, d.target);
+  EXPECT_EQ(rd.axes_starts, 4);
+  EXPECT_FALSE(rd.axes_won);
+  EXPECT_EQ(d.source.positions(), d0.positions());
+  EXPECT_LT(mean_error(d.source, d.truth), 0.005 * c.target.bbox_diagonal());
+}
+
 TEST(RigidIcp, AlignedInputIsLeftInPlace) {
   Case c = make_case(Eigen::Matrix3d::Identity(), Vec3::Zero());
   const std::vector<Vec3> start = c.source.positions();
@@ -92,6 +135,11 @@ TEST(RigidIcp, BadInputThrows) {
   p = RigidIcpParams{};
   p.tolerance = std::numeric_limits<double>::quiet_NaN();
   EXPECT_THROW(align_rigid(c.source, c.target, p), InvalidInput);
+  for (const double ratio : {-0.1, 1.5, std::numeric_limits<double>::quiet_NaN()}) {
+    p = RigidIcpParams{};
+    p.axes_win_ratio = ratio;
+    EXPECT_THROW(align_rigid(c.source, c.target, p), InvalidInput) << ratio;
+  }
   SurfaceMesh empty;
   EXPECT_THROW(align_rigid(empty, c.target), InvalidInput);
   c.source.positions()[0] = Vec3(std::nan(""), 0, 0);
