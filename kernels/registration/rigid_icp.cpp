@@ -141,21 +141,16 @@ Vec3 area_centroid(std::span<const Vec3> P, std::span<const std::array<Index, 3>
   return area > 0 ? Vec3(c / area) : c;
 }
 
-Vec3 area_centroid(const SurfaceMesh& mesh) {
-  Vec3 c = Vec3::Zero();
-  double area = 0;
+// The live triangles of `mesh`, by vertex handle index (deleted vertices are in no triangle).
+std::vector<std::array<Index, 3>> live_triangles(const SurfaceMesh& mesh) {
+  std::vector<std::array<Index, 3>> faces;
   for (std::size_t fi = 0; fi < mesh.faces_size(); ++fi) {
     const Face f{Index(fi)};
     if (mesh.is_deleted(f)) continue;
     const Halfedge h = mesh.halfedge(f);
-    const Vec3& a = mesh.positions()[mesh.to_vertex(mesh.prev(h)).idx];
-    const Vec3& b = mesh.positions()[mesh.to_vertex(h).idx];
-    const Vec3& d = mesh.positions()[mesh.to_vertex(mesh.next(h)).idx];
-    const double w = 0.5 * (b - a).cross(d - a).norm();
-    c += w * (a + b + d) / 3.0;
-    area += w;
+    faces.push_back({mesh.to_vertex(mesh.prev(h)).idx, mesh.to_vertex(h).idx, mesh.to_vertex(mesh.next(h)).idx});
   }
-  return area > 0 ? Vec3(c / area) : c;
+  return faces;
 }
 
 // The principal axes of the triangles' areas (second moments about the area-weighted centroid `c`), columns by
@@ -238,9 +233,12 @@ RigidIcpReport align_rigid(SurfaceMesh& mesh, const TargetSurface& target, const
   rep.distance_start = match(s, Rigid{}, target, params).trimmed_mean;
   Run best = icp(s, Rigid{}, target, params);
   rep.iterations = best.iterations;
+  const std::vector<std::array<Index, 3>> faces = live_triangles(mesh);
+  const std::span<const Vec3> points = mesh.positions();
+  const Vec3 cs = area_centroid(points, faces), ct = area_centroid(target.positions(), target.triangles());
   if (params.try_centroid_start) {
     Rigid shift;
-    shift.t = area_centroid(target.positions(), target.triangles()) - area_centroid(mesh);
+    shift.t = ct - cs;
     const Run run = icp(s, shift, target, params);
     rep.iterations += run.iterations;
     if (run.score < best.score) best = run;
@@ -248,15 +246,6 @@ RigidIcpReport align_rigid(SurfaceMesh& mesh, const TargetSurface& target, const
   if (params.axes_win_ratio > 0) {
     // The source's principal axes turned onto the target's, in each of the four proper ways (the axes' signs are
     // arbitrary), about the centroids matched; their best end wins only by the margin.
-    std::vector<std::array<Index, 3>> faces;
-    std::vector<Vec3> points(mesh.positions().begin(), mesh.positions().end());
-    for (std::size_t fi = 0; fi < mesh.faces_size(); ++fi) {
-      const Face f{Index(fi)};
-      if (mesh.is_deleted(f)) continue;
-      const Halfedge h = mesh.halfedge(f);
-      faces.push_back({mesh.to_vertex(mesh.prev(h)).idx, mesh.to_vertex(h).idx, mesh.to_vertex(mesh.next(h)).idx});
-    }
-    const Vec3 cs = area_centroid(points, faces), ct = area_centroid(target.positions(), target.triangles());
     const Mat3 As = principal_axes(points, faces, cs), At = principal_axes(target.positions(), target.triangles(), ct);
     Run axes;
     for (const Vec3& sign : {Vec3(1, 1, 1), Vec3(1, -1, -1), Vec3(-1, 1, -1), Vec3(-1, -1, 1)}) {
