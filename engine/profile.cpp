@@ -114,6 +114,10 @@ std::vector<Binding> bindings(TrackerParams& p) {
       {"fine.more_rounds_residual", &p.fine_params.more_rounds_residual, 0, 1},
       {"fine.more_rounds_tolerance", &p.fine_params.more_rounds_tolerance, 0, 1},
       {"fine.normal_displacement", &p.fine_params.normal_displacement},
+      {"fine.relax_iterations", &p.fine_params.relax.iterations, 0, 1e6},
+      {"fine.relax_plane_weight", &p.fine_params.relax.plane_weight, 1e-9, 1e12},
+      {"fine.relax_point_weight", &p.fine_params.relax.point_weight, 1e-12, 1e12},
+      {"fine.relax_cg_iterations", &p.fine_params.relax.cg_iterations, 1, 1e6},
       {"topology.max_region_growth", &p.constrain.max_region_growth, 0, 64},
   };
 }

@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <initializer_list>
 #include <optional>
+#include <span>
 #include <utility>
 #include <iostream>
 #include <nlohmann/json.hpp>
@@ -132,8 +133,9 @@ nlohmann::json run_coarse(SurfaceMesh& mesh, const TargetSurface& target, const 
                      {"total", r.seconds_total}});
 }
 
-nlohmann::json run_fine(SurfaceMesh& mesh, const TargetSurface& target, const FineParams& p) {
-  const FineReport r = align_fine(mesh, target, p);
+nlohmann::json run_fine(SurfaceMesh& mesh, const TargetSurface& target, const FineParams& p, std::span<const Vec3> rest) {
+  const FineReport r = align_fine(mesh, target, p, rest);
+  const RelaxReport& x = r.relax;
   return stage_json({{"cg_iterations", r.cg_iterations},
                      {"rounds", r.rounds},
                      {"mean_residual", r.mean_residual},
@@ -141,10 +143,21 @@ nlohmann::json run_fine(SurfaceMesh& mesh, const TargetSurface& target, const Fi
                      {"pruned", r.pruned},
                      {"residual", r.residual},
                      {"energy_start", r.energy_start},
-                     {"energy_end", r.energy_end}},
+                     {"energy_end", r.energy_end},
+                     {"relax", stage_json({{"iterations", x.iterations},
+                                           {"cg_iterations", x.cg_iterations},
+                                           {"energy_start", x.energy_start},
+                                           {"energy_end", x.energy_end},
+                                           {"mean_distance", x.mean_distance}},
+                                          {{"setup", x.seconds_setup},
+                                           {"closest", x.seconds_closest},
+                                           {"rotations", x.seconds_rotations},
+                                           {"solve", x.seconds_solve},
+                                           {"total", x.seconds_total}})}},
                     {{"raycast", r.seconds_raycast},
                      {"assembly", r.seconds_assembly},
                      {"solve", r.seconds_solve},
+                     {"relax", x.seconds_total},
                      {"total", r.seconds_total}});
 }
 
@@ -165,8 +178,9 @@ void run_align(const AlignOptions& opt) {
     j["mode"] = "projection";
   } else {
     j["mode"] = opt.coarse_only ? "coarse" : opt.fine_only ? "fine" : "coarse+fine";
+    const std::vector<Vec3> rest = mesh.positions();  // the source's shape, which the relaxation slides back towards
     if (!opt.fine_only) j["coarse"] = run_coarse(mesh, target, params.coarse_params);
-    if (!opt.coarse_only) j["fine"] = run_fine(mesh, target, params.fine_params);
+    if (!opt.coarse_only) j["fine"] = run_fine(mesh, target, params.fine_params, rest);
   }
   const std::filesystem::path out(opt.output);
   if (out.has_parent_path()) ensure_directory(out.parent_path());
@@ -183,8 +197,9 @@ void run_align(const AlignOptions& opt) {
                 j["coarse"]["prealign"]["applied"].get<bool>() ? " after a rigid pre-alignment" : "",
                 j["coarse"]["seconds"]["total"].get<double>());
   if (j.contains("fine"))
-    std::printf("; fine %zu matched, %zu pruned, %.3f s", j["fine"]["correspondences"].get<std::size_t>(),
-                j["fine"]["pruned"].get<std::size_t>(), j["fine"]["seconds"]["total"].get<double>());
+    std::printf("; fine %zu matched, %zu pruned%s, %.3f s", j["fine"]["correspondences"].get<std::size_t>(),
+                j["fine"]["pruned"].get<std::size_t>(), j["fine"]["relax"]["iterations"].get<int>() > 0 ? ", relaxed on the target" : "",
+                j["fine"]["seconds"]["total"].get<double>());
   std::printf("\n");
 }
 
@@ -203,7 +218,7 @@ void add_align_command(CLI::App& app) {
                   "deformation-graph node density relative to the paper's (1, 0.5, 0.25: fast preview)")
       ->check(CLI::Range(1e-3, 1.0));
   sub->add_flag("--no-large-motion", opt->no_large_motion,
-                "the paper's scheme alone: no rigid pre-alignment, no low-density first pass, no backward matches, no intrinsic matches, one fine round");
+                "the paper's scheme alone: no rigid pre-alignment, no low-density first pass, no backward matches, no intrinsic matches, one fine round, no relaxation");
   sub->add_option("--sigma", opt->sigma, "fine-stage pruning distance, fraction of the bbox diagonal")
       ->check(CLI::PositiveNumber);
   sub->add_option("--profile", opt->profile, "bundled profile name or a .json file (default: the paper's values)");

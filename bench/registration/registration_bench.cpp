@@ -50,6 +50,8 @@ namespace {
 struct Fixture {
   SurfaceMesh source;
   std::unique_ptr<TargetSurface> target;
+  std::vector<Vec3> truth;  //!< where each source vertex belongs on the target (test::refine_source for the re-meshed sizes)
+  double diagonal = 1;
 };
 
 const Fixture& fixture(int size, int gap) {
@@ -59,7 +61,10 @@ const Fixture& fixture(int size, int gap) {
     f = std::make_unique<Fixture>();
     test::AlignmentPair pair = test::make_pair(size == 0 || size == 4 ? "samba" : "elephant", 1, gap);
     const double refine[] = {1.0, 1.0, 0.85, 0.563, 0.24};  // edge length factors of the re-meshed sizes
-    f->source = size >= 2 ? test::resample(pair.source, refine[size]) : std::move(pair.source);
+    if (size >= 2) test::refine_source(pair, refine[size]);
+    f->source = std::move(pair.source);
+    f->truth = std::move(pair.truth);
+    f->diagonal = pair.diagonal;
     f->target = std::make_unique<TargetSurface>(TargetSurface::from_mesh(pair.target_mesh));
   }
   return *f;
@@ -161,17 +166,26 @@ void BM_AlignCoarseFine(benchmark::State& state) {
   fine.normal_displacement = state.range(5) != 0;
   if (state.range(4) != 0) use_large_motion_alignment(params, fine);  // as topotrack align runs it
   override_params(params);
+  if (const char* e = std::getenv("TOPOTRACK_BENCH_RELAX")) fine.relax.iterations = std::atoi(e);  // 0: no relaxation
   CoarseReport c;
   FineReport fr;
+  double truth = 0;
   for (auto _ : state) {
     state.PauseTiming();
     SurfaceMesh mesh = f.source.clone();
     state.ResumeTiming();
     c = align_coarse(mesh, *f.target, params);
-    fr = align_fine(mesh, *f.target, fine);
+    fr = align_fine(mesh, *f.target, fine, f.source.positions());
     benchmark::DoNotOptimize(mesh.positions().data());
+    state.PauseTiming();
+    double sum = 0;
+    for (const double e : test::truth_errors(mesh.positions(), f.truth, f.diagonal)) sum += e;
+    truth = 100 * sum / double(std::max<std::size_t>(1, f.truth.size()));
+    state.ResumeTiming();
   }
   alignment_counters(state, c, fr);
+  state.counters["truth_pct"] = truth;  // mean ground-truth error, % of the target's bounding-box diagonal
+  state.counters["relax_s"] = fr.relax.seconds_total;
   state.counters["vertices"] = double(f.source.n_vertices());
   state.counters["levels"] = c.levels;
   state.counters["factor_nnz"] = double(c.factor_nonzeros);

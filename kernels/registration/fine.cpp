@@ -9,39 +9,13 @@
 
 #include "kernels/mesh/mesh_queries.hpp"
 #include "kernels/registration/correspondences.hpp"
+#include "kernels/registration/parallel.hpp"
 
 namespace topotrack {
 namespace {
 
 using Clock = std::chrono::steady_clock;
 double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
-
-// Sums in fixed chunks, partials added in chunk order: the same bits for any thread count.
-constexpr std::size_t kChunk = 4096;
-
-template <class F>
-Vec3 deterministic_sum(std::size_t n, F&& term) {
-  const std::size_t chunks = (n + kChunk - 1) / kChunk;
-  std::vector<Vec3> partial(chunks, Vec3::Zero());
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, chunks, 1), [&](const auto& r) {
-    for (std::size_t c = r.begin(); c != r.end(); ++c) {
-      Vec3 s = Vec3::Zero();
-      const std::size_t end = std::min(n, (c + 1) * kChunk);
-      for (std::size_t i = c * kChunk; i < end; ++i) s += term(i);
-      partial[c] = s;
-    }
-  });
-  Vec3 total = Vec3::Zero();
-  for (const Vec3& p : partial) total += p;
-  return total;
-}
-
-template <class F>
-void parallel_each(std::size_t n, F&& f) {
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 2048), [&](const auto& r) {
-    for (std::size_t i = r.begin(); i != r.end(); ++i) f(i);
-  });
-}
 
 // Vertex adjacency by handle index (CSR, neighbours in one-ring order), built in parallel.
 struct Adjacency {
@@ -204,7 +178,7 @@ void solve_round(SurfaceMesh& mesh, const Adjacency& adj, const std::vector<Vec3
 
 }  // namespace
 
-FineReport align_fine(SurfaceMesh& mesh, const TargetSurface& target, const FineParams& params) {
+FineReport align_fine(SurfaceMesh& mesh, const TargetSurface& target, const FineParams& params, std::span<const Vec3> rest) {
   const auto t_total = Clock::now();
   if (!(params.sigma > 0) || !(params.fit_weight > 0) || !(params.smooth_weight >= 0) ||
       params.max_cg_iterations < 0 || !(params.tolerance >= 0) || params.rounds < 1 || params.max_rounds < 1 ||
@@ -266,6 +240,7 @@ FineReport align_fine(SurfaceMesh& mesh, const TargetSurface& target, const Fine
     rep.mean_residual /= D;
     rep.rounds = round + 1;
   }
+  if (!rest.empty()) rep.relax = relax_on_target(mesh, rest, target, params.relax);
   rep.seconds_total = seconds_since(t_total);
   return rep;
 }

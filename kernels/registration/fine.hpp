@@ -6,8 +6,11 @@
 //! (FineParams::normal_displacement) the displacements are scalars along the vertex normals.
 #include <cstddef>
 
+#include <span>
+
 #include "kernels/mesh/surface_mesh.hpp"
 #include "kernels/raycast/target_surface.hpp"
+#include "kernels/registration/relax.hpp"
 
 namespace topotrack {
 
@@ -36,6 +39,9 @@ struct FineParams {
   //! Measured, two runs each: `gen blobs` (100 frames) drift 0.019 / 0.021 -> 0.013 / 0.016 %; resurfaced
   //! samba and pcow (40 frames) unchanged within run-to-run noise; same speed (108k vertices).
   bool normal_displacement = false;
+  //! After the rounds, the relaxation on the target (relax.hpp) towards the rest shape given to align_fine; off
+  //! (0 iterations) by default and in the tracker; `topotrack align` takes kLargeMotionRelaxIterations.
+  RelaxParams relax;
 };
 
 //! FineParams::max_rounds for large motion (`topotrack align`, unless --no-large-motion). Measured, frame 1 -> 16,
@@ -57,11 +63,15 @@ struct FineReport {
   double residual = 0;                 //!< final relative CG residual (largest over the coordinates)
   double energy_start = 0, energy_end = 0;      //!< E_tot at d = 0 and at the solution, last round
   double seconds_raycast = 0, seconds_assembly = 0, seconds_solve = 0, seconds_total = 0;
+  RelaxReport relax;  //!< FineParams::relax (within seconds_total)
 };
 
 //! Displace the vertices of `mesh` onto `target` (§4.2, fine stage). Moves positions only; a vertex
 //! without a correspondence follows its neighbours; a component without any correspondence stays.
-//! Deterministic for any thread count.  \throw InvalidInput on bad parameters.
-FineReport align_fine(SurfaceMesh& mesh, const TargetSurface& target, const FineParams& params = {});
+//! Deterministic for any thread count. `rest`: the mesh's shape before the alignment (positions by vertex handle
+//! index), which FineParams::relax slides it towards; without it (empty) there is no relaxation.
+//! \throw InvalidInput on bad parameters.
+FineReport align_fine(SurfaceMesh& mesh, const TargetSurface& target, const FineParams& params = {},
+                      std::span<const Vec3> rest = {});
 
 }  // namespace topotrack

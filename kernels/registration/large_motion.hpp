@@ -32,6 +32,7 @@ inline void use_large_motion_alignment(CoarseParams& coarse, FineParams& fine) {
   coarse.vertex_fit_max_disagreement = kLargeMotionVertexFitMaxDisagreement;
   coarse.backward_vertex_weight = kLargeMotionBackwardVertexWeight;
   fine.max_rounds = kLargeMotionFineRounds;
+  fine.relax.iterations = kLargeMotionRelaxIterations;
 }
 
 }  // namespace topotrack

@@ -960,12 +960,15 @@ TEST(Alignment, OneAndTwoThreadsGiveIdenticalResults) {
       q.intrinsic.misplaced_spacings = 0;
       q.check_fit_first = false;  // the first pass runs its rounds (else it may find itself fitted, with no graph)
       const double e_edge = mean_edge_length(e.source);
+      const std::vector<Vec3> e_rest = e.source.positions();
       const CoarseReport er = align_coarse(e.source, e.target, q);
       EXPECT_TRUE(er.backward_at_vertices);  // the misfit gives every node backward matches: at the vertices
       EXPECT_LT(er.node_spacing, 3 * e_edge);  // min_nodes: the blob's few vertices
       EXPECT_EQ(er.intrinsic_passes, 1);
       EXPECT_EQ(er.low_density.rounds, er.coarse_pass_iterations);
       EXPECT_GT(er.low_density.factorisations, 1);  // the first pass's and the guided pass's
+      const FineReport fr = align_fine(e.source, e.target, f, e_rest);  // with the relaxation on the target
+      EXPECT_EQ(fr.relax.iterations, kLargeMotionRelaxIterations);
       out.insert(out.end(), e.source.positions().begin(), e.source.positions().end());
       // `align`'s configuration where the pass does not run: the denser graph's level.
       const Eigen::Matrix3d R3 = rotation(8, Vec3(1, 1, 0));
