@@ -228,31 +228,25 @@ RelaxReport relax_on_target(SurfaceMesh& mesh, std::span<const Vec3> rest, const
   // Symmetric two-level preconditioner: block Jacobi (the 3 x 3 blocks, which hold the stiff point-to-plane term),
   // the coarse level's correction of the residual's part along the surface (the point-to-plane term leaves that
   // direction to the Laplacian alone), block Jacobi again.
-  const auto block_jacobi = [&](const Rows3& in, Rows3& out, bool add) {
-    parallel_each(n, [&](std::size_t i) {
-      const Vec3 zi = adj.live(i) ? Vec3(M_inverse[i] * row(in, i)) : row(in, i);
-      set_row(out, i, add ? Vec3(row(out, i) + zi) : zi);
-    });
-  };
-  const auto along_surface = [&](Rows3& v) {
-    parallel_each(n, [&](std::size_t i) {
-      if (!adj.live(i)) return;
-      const Vec3& nn = hit[i].normal;
-      const Vec3 vi = row(v, i);
-      set_row(v, i, vi - nn * nn.dot(vi));
-    });
+  const auto along_surface = [&](std::size_t i, const Vec3& v) {
+    const Vec3& nn = hit[i].normal;
+    return Vec3(v - nn * nn.dot(v));
   };
   const auto precondition = [&](const Rows3& res, Rows3& out) {
-    block_jacobi(res, out, false);
+    parallel_each(n, [&](std::size_t i) { set_row(out, i, adj.live(i) ? Vec3(M_inverse[i] * row(res, i)) : row(res, i)); });
     apply(out, t);
-    u = res - t;
-    along_surface(u);
+    parallel_each(n, [&](std::size_t i) {
+      const Vec3 ri = row(res, i) - row(t, i);
+      set_row(u, i, adj.live(i) ? along_surface(i, ri) : ri);
+    });
     coarse.correct(u);
-    along_surface(u);
-    out += u;
+    parallel_each(n, [&](std::size_t i) {
+      if (adj.live(i)) set_row(out, i, row(out, i) + along_surface(i, row(u, i)));
+    });
     apply(out, t);
-    u = res - t;
-    block_jacobi(u, out, true);
+    parallel_each(n, [&](std::size_t i) {
+      if (adj.live(i)) set_row(out, i, row(out, i) + M_inverse[i] * (row(res, i) - row(t, i)));
+    });
   };
   const auto dot = [&](const Rows3& a, const Rows3& b) {
     return deterministic_sum(n, [&](std::size_t i) { return Vec3(row(a, i).dot(row(b, i)), 0, 0); })[0];
@@ -317,7 +311,7 @@ RelaxReport relax_on_target(SurfaceMesh& mesh, std::span<const Vec3> rest, const
     });
     if (it == 0) rep.energy_start = energy();
     apply(sol, Ap);
-    r = rhs - Ap;
+    parallel_each(n, [&](std::size_t i) { set_row(r, i, row(rhs, i) - row(Ap, i)); });
     precondition(r, z);
     p = z;
     double rz = dot(r, z);
@@ -326,11 +320,13 @@ RelaxReport relax_on_target(SurfaceMesh& mesh, std::span<const Vec3> rest, const
       const double pAp = dot(p, Ap);
       if (!(pAp > 0)) break;
       const double alpha = rz / pAp;
-      sol += alpha * p;
-      r -= alpha * Ap;
+      parallel_each(n, [&](std::size_t i) {
+        set_row(sol, i, row(sol, i) + alpha * row(p, i));
+        set_row(r, i, row(r, i) - alpha * row(Ap, i));
+      });
       precondition(r, z);
-      const double rz_new = dot(r, z);
-      p = z + (rz_new / rz) * p;
+      const double rz_new = dot(r, z), beta_cg = rz_new / rz;
+      parallel_each(n, [&](std::size_t i) { set_row(p, i, row(z, i) + beta_cg * row(p, i)); });
       rz = rz_new;
       ++rep.cg_iterations;
     }
