@@ -240,7 +240,11 @@ FineReport align_fine(SurfaceMesh& mesh, const TargetSurface& target, const Fine
     rep.mean_residual /= D;
     rep.rounds = round + 1;
   }
-  if (!rest.empty()) rep.relax = relax_on_target(mesh, rest, target, params.relax);
+  if (!rest.empty()) {  // the relaxation fits the vertices the fine stage's sigma would match
+    RelaxParams relax = params.relax;
+    relax.max_distance = params.sigma;
+    rep.relax = relax_on_target(mesh, rest, target, relax);
+  }
   rep.seconds_total = seconds_since(t_total);
   return rep;
 }

@@ -191,7 +191,7 @@ RelaxReport relax_on_target(SurfaceMesh& mesh, std::span<const Vec3> rest, const
                             const RelaxParams& params) {
   const auto t_total = Clock::now();
   if (params.iterations < 0 || !(params.plane_weight > 0) || !(params.point_weight > 0) || params.cg_iterations < 1 ||
-      !std::isfinite(params.plane_weight) || !std::isfinite(params.point_weight))
+      !std::isfinite(params.plane_weight) || !std::isfinite(params.point_weight) || !(params.max_distance > 0))
     TT_THROW(InvalidInput, "relax_on_target: invalid parameters");
   const std::size_t n = mesh.vertices_size();
   if (rest.size() != n)
@@ -205,21 +205,23 @@ RelaxReport relax_on_target(SurfaceMesh& mesh, std::span<const Vec3> rest, const
   const double lambda = params.plane_weight, beta = params.point_weight;
   const Adjacency adj = cotangent_adjacency(mesh, rest);
   const CoarseLevel coarse(mesh, rest, adj, lambda * beta);
-  std::size_t n_live = 0;
-  for (std::size_t v = 0; v < n; ++v) n_live += adj.live(v);
   rep.seconds_setup = seconds_since(t0);
 
   std::vector<Vec3>& x = mesh.positions();
   std::vector<Mat3> R(n, Mat3::Identity()), M(n, Mat3::Identity()), M_inverse(n, Mat3::Identity());
   std::vector<TargetSurface::Hit> hit(n);
   std::vector<Vec3> moved(n, Vec3::Zero());  // how far each vertex went since its closest point was found
-  const double diagonal = target.bbox_diagonal();
+  const double diagonal = target.bbox_diagonal(), max_distance = params.max_distance * diagonal;
+  // A vertex is fitted (has the point-to-plane term) while its closest point lies within max_distance, as the fine
+  // stage prunes its rays; a component none of whose vertices is fitted at the start stays where it is, as the fine
+  // stage leaves it (there is nothing to slide it along), and so do vertices in no triangle.
+  std::vector<char> moving(n, 0), fitted(n, 0);
   // The global step's system (L (x) I + lambda (n n^T + beta I)) x = b, by vertex: M_i, the 3 x 3 diagonal block, and
   // the edges' -w_ij I. Vectors are n x 3 (vertex i's x, y, z in row i); a vertex that is not live keeps its row.
   Rows3 rhs(n, 3), sol(n, 3), r(n, 3), z(n, 3), p(n, 3), Ap(n, 3), t(n, 3), u(n, 3);
   const auto apply = [&](const Rows3& v, Rows3& out) {
     parallel_each(n, [&](std::size_t i) {
-      if (!adj.live(i)) return set_row(out, i, row(v, i));
+      if (!moving[i]) return set_row(out, i, row(v, i));
       Vec3 o = M[i] * row(v, i);
       for (Index q = adj.offset[i]; q < adj.offset[i + 1]; ++q) o -= adj.weight[q] * row(v, adj.neighbor[q]);
       set_row(out, i, o);
@@ -229,23 +231,24 @@ RelaxReport relax_on_target(SurfaceMesh& mesh, std::span<const Vec3> rest, const
   // the coarse level's correction of the residual's part along the surface (the point-to-plane term leaves that
   // direction to the Laplacian alone), block Jacobi again.
   const auto along_surface = [&](std::size_t i, const Vec3& v) {
+    if (!fitted[i]) return v;
     const Vec3& nn = hit[i].normal;
     return Vec3(v - nn * nn.dot(v));
   };
   const auto precondition = [&](const Rows3& res, Rows3& out) {
-    parallel_each(n, [&](std::size_t i) { set_row(out, i, adj.live(i) ? Vec3(M_inverse[i] * row(res, i)) : row(res, i)); });
+    parallel_each(n, [&](std::size_t i) { set_row(out, i, moving[i] ? Vec3(M_inverse[i] * row(res, i)) : row(res, i)); });
     apply(out, t);
     parallel_each(n, [&](std::size_t i) {
       const Vec3 ri = row(res, i) - row(t, i);
-      set_row(u, i, adj.live(i) ? along_surface(i, ri) : ri);
+      set_row(u, i, moving[i] ? along_surface(i, ri) : ri);
     });
     coarse.correct(u);
     parallel_each(n, [&](std::size_t i) {
-      if (adj.live(i)) set_row(out, i, row(out, i) + along_surface(i, row(u, i)));
+      if (moving[i]) set_row(out, i, row(out, i) + along_surface(i, row(u, i)));
     });
     apply(out, t);
     parallel_each(n, [&](std::size_t i) {
-      if (adj.live(i)) set_row(out, i, row(out, i) + M_inverse[i] * (row(res, i) - row(t, i)));
+      if (moving[i]) set_row(out, i, row(out, i) + M_inverse[i] * (row(res, i) - row(t, i)));
     });
   };
   const auto dot = [&](const Rows3& a, const Rows3& b) {
@@ -254,12 +257,13 @@ RelaxReport relax_on_target(SurfaceMesh& mesh, std::span<const Vec3> rest, const
   // The energy at x for the current rotations and correspondences.
   const auto energy = [&] {
     return deterministic_sum(n, [&](std::size_t i) {
-      if (!adj.live(i)) return Vec3::Zero().eval();
+      if (!moving[i]) return Vec3::Zero().eval();
       double e = 0;
       for (Index q = adj.offset[i]; q < adj.offset[i + 1]; ++q) {
         const Index j = adj.neighbor[q];
         e += 0.5 * adj.weight[q] * ((x[i] - x[j]) - 0.5 * (R[i] + R[j]) * (rest[i] - rest[j])).squaredNorm();
       }
+      if (!fitted[i]) return Vec3(e, 0, 0);
       const Vec3 d = x[i] - hit[i].point;
       const double dn = hit[i].normal.dot(d);
       return Vec3(e + lambda * (dn * dn + beta * d.squaredNorm()), 0, 0);
@@ -271,19 +275,29 @@ RelaxReport relax_on_target(SurfaceMesh& mesh, std::span<const Vec3> rest, const
     // since (the same point as an unbounded query, found in a smaller search).
     t0 = Clock::now();
     parallel_each(n, [&](std::size_t i) {
-      if (!adj.live(i)) return;
+      if (!(it == 0 ? adj.live(i) : moving[i])) return;
       TargetSurface::Hit h;
       if (it > 0) h = target.closest_point(x[i], (hit[i].distance + moved[i].norm()) * (1 + 1e-9) + 1e-12 * diagonal);
       hit[i] = h.hit ? h : target.closest_point(x[i]);
+      fitted[i] = hit[i].distance <= max_distance;
       moved[i].setZero();
     });
-    rep.mean_distance = deterministic_sum(n, [&](std::size_t i) { return Vec3(adj.live(i) ? hit[i].distance : 0.0, 0, 0); })[0] /
-                        (double(std::max<std::size_t>(1, n_live)) * diagonal);
+    if (it == 0) {
+      std::vector<Index> component;
+      const Index components = connected_components(mesh, &component);
+      std::vector<char> reached(components, 0);
+      for (std::size_t i = 0; i < n; ++i)
+        if (fitted[i]) reached[component[i]] = 1;
+      for (std::size_t i = 0; i < n; ++i) moving[i] = adj.live(i) && reached[component[i]];
+    }
+    const Vec3 fit_sum = deterministic_sum(n, [&](std::size_t i) { return Vec3(fitted[i] ? hit[i].distance : 0.0, fitted[i] ? 1.0 : 0.0, 0); });
+    rep.fitted = std::size_t(fit_sum[1]);
+    rep.mean_distance = fit_sum[1] > 0 ? fit_sum[0] / (fit_sum[1] * diagonal) : 0.0;
     rep.seconds_closest += seconds_since(t0);
     // Local step: each vertex's rotation of its rest edges onto its current ones.
     t0 = Clock::now();
     parallel_each(n, [&](std::size_t i) {
-      if (!adj.live(i)) return;
+      if (!moving[i]) return;
       Mat3 A = Mat3::Zero();
       for (Index q = adj.offset[i]; q < adj.offset[i + 1]; ++q) {
         const Index j = adj.neighbor[q];
@@ -297,9 +311,9 @@ RelaxReport relax_on_target(SurfaceMesh& mesh, std::span<const Vec3> rest, const
     t0 = Clock::now();
     parallel_each(n, [&](std::size_t i) {
       set_row(sol, i, x[i]);
-      if (!adj.live(i)) return set_row(rhs, i, x[i]);
+      if (!moving[i]) return set_row(rhs, i, x[i]);
       const Vec3& nn = hit[i].normal;
-      const Mat3 fit = lambda * (nn * nn.transpose() + beta * Mat3::Identity());
+      const Mat3 fit = fitted[i] ? Mat3(lambda * (nn * nn.transpose() + beta * Mat3::Identity())) : Mat3::Zero();
       M[i] = fit + adj.degree[i] * Mat3::Identity();
       M_inverse[i] = M[i].inverse();
       Vec3 b = fit * hit[i].point;
@@ -332,7 +346,7 @@ RelaxReport relax_on_target(SurfaceMesh& mesh, std::span<const Vec3> rest, const
     }
     parallel_each(n, [&](std::size_t i) {
       const Vec3 next = row(sol, i);
-      if (!adj.live(i) || !next.allFinite()) return;
+      if (!moving[i] || !next.allFinite()) return;
       moved[i] += next - x[i];
       x[i] = next;
     });

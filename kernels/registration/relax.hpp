@@ -24,6 +24,9 @@ struct RelaxParams {
   double plane_weight = 10;     //!< lambda, per vertex, relative to the mean edge weight
   double point_weight = 1e-3;   //!< beta: the point-to-point share of the fit (keeps the system definite)
   int cg_iterations = 5;        //!< conjugate-gradient iterations per global step
+  //! A vertex farther than this from the target (a fraction of its bounding-box diagonal) has no fit term (align_fine
+  //! passes its sigma, §4.2's 0.1).
+  double max_distance = 0.1;
 };
 
 //! RelaxParams::iterations for `topotrack align` (use_large_motion_alignment). Measured (docs/results.md, 2026-12-07):
@@ -37,7 +40,8 @@ struct RelaxReport {
   int iterations = 0;
   int cg_iterations = 0;           //!< summed over the global steps
   double energy_start = 0, energy_end = 0;  //!< the energy above at the first and the last step's correspondences
-  double mean_distance = 0;        //!< mean distance of the live vertices to the target before the last step / diagonal
+  std::size_t fitted = 0;          //!< vertices with a fit term in the last iteration
+  double mean_distance = 0;        //!< their mean distance to the target before the last step / diagonal
   int coarse_nodes = 0;            //!< nodes of the preconditioner's coarse level
   double seconds_setup = 0, seconds_closest = 0, seconds_rotations = 0, seconds_solve = 0, seconds_total = 0;
 };

@@ -121,6 +121,27 @@ TEST(Relax, RefusesBadInputAndDoesNothingWithoutIterations) {
   bad = relax(1);
   bad.cg_iterations = 0;
   EXPECT_THROW(relax_on_target(c.mesh, c.rest, c.target, bad), InvalidInput);
+  bad = relax(1);
+  bad.max_distance = 0;
+  EXPECT_THROW(relax_on_target(c.mesh, c.rest, c.target, bad), InvalidInput);
+  std::vector<Vec3> not_finite = c.rest;
+  not_finite[3].x() = std::nan("");
+  EXPECT_THROW(relax_on_target(c.mesh, not_finite, c.target, relax(1)), InvalidInput);
+}
+
+// A component with no counterpart in the target (beyond max_distance) stays where it is, as the fine stage leaves it;
+// the one on the target is fitted.
+TEST(Relax, AComponentBeyondReachStays) {
+  test::FarSphereCase c = test::far_sphere_case();
+  std::vector<Vec3> rest = c.mesh.positions();
+  for (std::size_t i = 0; i < c.near_vertices; ++i) rest[i] *= 1.02;  // the near sphere's rest shape a little larger
+  const std::vector<Vec3> before = c.mesh.positions();
+  RelaxParams p = relax(5);
+  p.max_distance = 0.3;  // of the target's diagonal (2.06): the far sphere, 3 away, is beyond it
+  const RelaxReport r = relax_on_target(c.mesh, rest, c.target, p);
+  for (std::size_t i = c.near_vertices; i < before.size(); ++i) ASSERT_EQ(c.mesh.positions()[i], before[i]);
+  EXPECT_EQ(r.fitted, c.near_vertices);
+  for (std::size_t i = 0; i < c.near_vertices; ++i) EXPECT_NEAR(c.mesh.positions()[i].norm(), 1.03, 2e-3);
 }
 
 // align_fine runs the relaxation after its rounds where it is given the rest shape, and only then.
