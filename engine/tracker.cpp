@@ -285,6 +285,8 @@ struct Tracker::Impl {
         project_to_closest(mesh, surface);
         report.seconds.coarse += since(t0);
       } else {
+        // FineParams::relax slides M along S_n towards its shape before this frame's alignment (off by default).
+        const std::vector<Vec3> rest = params.fine && params.fine_params.relax.iterations > 0 ? mesh.positions() : std::vector<Vec3>{};
         if (params.coarse) {  // line 5
           const auto t0 = Clock::now();
           const CoarseReport coarse = align_coarse(mesh, surface, params.coarse_params);
@@ -294,9 +296,10 @@ struct Tracker::Impl {
         }
         if (params.fine) {  // line 6
           const auto t0 = Clock::now();
-          const FineReport fine = align_fine(mesh, surface, params.fine_params);
+          const FineReport fine = align_fine(mesh, surface, params.fine_params, rest);
           report.fine_iterations = fine.cg_iterations;
           report.fine_rounds = fine.rounds;
+          report.relax_iterations = fine.relax.iterations;
           report.seconds.fine += since(t0);
         }
       }

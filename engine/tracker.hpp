@@ -51,6 +51,7 @@ struct FrameReport {
   topology::VerdictCounts complex_reasons_self{}, complex_reasons_target{};
   int coarse_iterations = 0, fine_iterations = 0;
   int fine_rounds = 0;             //!< ray casting + solve rounds of the fine stage (FineParams::max_rounds)
+  int relax_iterations = 0;        //!< of the relaxation on S_n towards M's shape (FineParams::relax; 0 by default)
   int coarse_pass_iterations = 0;  //!< rounds of the low-density large-motion pass (0: it did not run)
   //! ConstrainTopology calls that could not produce a valid mesh and were skipped (M kept as it was).
   std::size_t topology_failures = 0;

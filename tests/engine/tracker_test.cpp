@@ -104,6 +104,37 @@ TEST(Tracker, FollowsATranslationCoherently) {
   EXPECT_LT((mean_v - step).norm(), 0.2 * step.norm());
 }
 
+// FineParams::relax in the tracker (off by default): each frame's M slides along S_n towards its own shape before
+// the frame; a translation keeps the shape, so the tracking stays as coherent.
+TEST(Tracker, RelaxesOnTheTargetWhenAsked) {
+  const Vec3 step(0.04, 0.01, 0);
+  const auto frames = translating_peanut(3, step);
+  TrackerParams params;
+  params.fine_params.relax.iterations = 3;
+  Tracker tracker(params);
+  std::unordered_map<VertexId, Vec3> start;
+  for (std::size_t f = 0; f < frames.size(); ++f) {
+    const FrameReport& r = tracker.add_frame(frames[f]);
+    EXPECT_EQ(r.relax_iterations, f == 0 ? 0 : 3);
+    if (f == 0)
+      for (Index i = 0; i < tracker.mesh().vertices_size(); ++i) start[tracker.mesh().id(Vertex(i))] = tracker.mesh().position(Vertex(i));
+  }
+  EXPECT_NO_THROW(tracker.mesh().validate(true));
+  // A translation keeps the shape: the points that were never resampled moved with it, as without the relaxation.
+  const Vec3 total = 2.0 * step;
+  std::size_t kept = 0;
+  double err = 0;
+  for (Index i = 0; i < tracker.mesh().vertices_size(); ++i) {
+    const auto it = start.find(tracker.mesh().id(Vertex(i)));
+    if (it == start.end()) continue;
+    ++kept;
+    err += (tracker.mesh().position(Vertex(i)) - (it->second + total)).norm();
+  }
+  ASSERT_GT(kept, start.size() * 8 / 10);
+  EXPECT_LT(err / double(kept), 0.01 * bounding_box(tracker.mesh()).diagonal());
+  EXPECT_EQ(Tracker().add_frame(frames[0]).relax_iterations, 0);  // off by default
+}
+
 TEST(Tracker, TakesTheTopologyOfTheInput) {
   // A peanut whose neck pinches off: the tracked mesh must split into two components and stay closed.
   std::vector<SurfaceMesh> frames;
