@@ -38,7 +38,7 @@ void run_export(const ExportOptions& opt) {
   std::vector<Stretch> stretches;
   FrameGeometry prev;
   for (std::size_t k = 0; k < frames.size(); ++k) {
-    FrameGeometry g = load_frame(frames[k].path, false).geometry;
+    FrameGeometry g = read_frame_file(frames[k].path, false).geometry;
     if (g.positions.empty()) TT_THROW(InvalidInput, frames[k].path.string() << ": no vertices");
     const bool same = k > 0 && g.positions.size() == prev.positions.size() &&
                       match_connectivity(prev.ids, prev.triangles, g.ids, g.triangles).has_value();
@@ -53,7 +53,7 @@ void run_export(const ExportOptions& opt) {
   const std::string name = sequence_name(frames[0].path);
   nlohmann::json list = nlohmann::json::array();
   for (const Stretch& s : stretches) {
-    const LoadedFrame base_frame = load_frame(frames[s.begin].path, false);
+    const FrameFile base_frame = read_frame_file(frames[s.begin].path, false);
     const MeshData& base_data = base_frame.data;
     const FrameGeometry& base = base_frame.geometry;
     const long first = frames[s.begin].number >= 0 ? frames[s.begin].number : long(s.begin);
@@ -78,7 +78,7 @@ void run_export(const ExportOptions& opt) {
     std::vector<std::array<double, 3>> sample(base.positions.size());
     writer.add_sample(base_data.positions);
     for (std::size_t k = s.begin + 1; k < s.end; ++k) {
-      const LoadedFrame f = load_frame(frames[k].path, false);
+      const FrameFile f = read_frame_file(frames[k].path, false);
       const auto map = match_connectivity(base.ids, base.triangles, f.geometry.ids, f.geometry.triangles);
       if (!map) TT_THROW(InvalidInput, frames[k].path.string() << ": connectivity changed while exporting (file "
                                                                   "rewritten?)");

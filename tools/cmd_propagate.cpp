@@ -176,7 +176,7 @@ void run_propagate(const PropagateOptions& opt) {
     if (source == count) TT_THROW(UsageError, "--from " << opt.from << ": no frame with that number");
   }
   const SourceSpec spec = parse_spec(opt.source);
-  const LoadedFrame src = load_frame(frames[source].mesh, true);
+  const FrameFile src = read_frame_file(frames[source].mesh, true);
   const IdField start = evaluate_source(spec, src.data, src.geometry, frames[source].mesh);
   if (opt.round_trip) {
     run_round_trip(frames, source, start);
@@ -193,21 +193,21 @@ void run_propagate(const PropagateOptions& opt) {
   // Morph (§5): the second source on the last frame, propagated backward to every frame and kept in memory.
   std::vector<std::vector<float>> morph_values;
   if (morph) {
-    const LoadedFrame last = load_frame(frames[count - 1].mesh, true);
+    const FrameFile last = read_frame_file(frames[count - 1].mesh, true);
     const IdField end = evaluate_source(parse_spec(opt.morph_source), last.data, last.geometry, frames[count - 1].mesh);
     if (end.width != width) TT_THROW(UsageError, "--morph-source has width " << end.width << ", the source " << width);
     morph_values.resize(count);
     propagate_sequence(
         count, count - 1, false, end, [&](std::size_t k) { return load_frame_events(frames, k); },
         [&](std::size_t k, const IdTable& table) {
-          gather_values(table, load_frame(frames[k].mesh, true).geometry.ids, fallback, morph_values[k]);
+          gather_values(table, read_frame_file(frames[k].mesh, true).geometry.ids, fallback, morph_values[k]);
         });
   }
 
   std::size_t missing = 0, written = 0;
   SequencePropagateReport total;
   auto emit = [&](std::size_t k, const IdTable& table) {
-    LoadedFrame f = load_frame(frames[k].mesh, true);
+    FrameFile f = read_frame_file(frames[k].mesh, true);
     std::vector<float> values;
     missing += gather_values(table, f.geometry.ids, fallback, values);
     if (morph) {

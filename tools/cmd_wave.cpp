@@ -61,7 +61,7 @@ void run_wave(const WaveOptions& opt) {
   nlohmann::json log = nlohmann::json::array();
   double sim_seconds = 0;
   for (std::size_t k = 0; k < frames.size(); ++k) {
-    LoadedFrame frame = load_frame(frames[k].mesh, true);
+    FrameFile frame = read_frame_file(frames[k].mesh, true);
     MeshData& data = frame.data;
     const FrameGeometry& g = frame.geometry;
     if (k == 0) {

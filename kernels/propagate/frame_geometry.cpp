@@ -43,8 +43,8 @@ FrameGeometry frame_geometry(const MeshData& data) {
   return g;
 }
 
-LoadedFrame load_frame(const std::filesystem::path& path, bool require_ids) {
-  LoadedFrame l;
+FrameFile read_frame_file(const std::filesystem::path& path, bool require_ids) {
+  FrameFile l;
   l.data = read_mesh(path);
   try {
     l.geometry = frame_geometry(l.data);

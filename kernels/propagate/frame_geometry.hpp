@@ -25,13 +25,13 @@ struct FrameGeometry {
 FrameGeometry frame_geometry(const MeshData& data);
 
 //! A frame file read with its geometry.
-struct LoadedFrame {
+struct FrameFile {
   MeshData data;
   FrameGeometry geometry;
 };
 //! Read a mesh file (io/mesh_reader.hpp) and its geometry. \throw IoError, InvalidInput naming the file; with
 //! `require_ids`, InvalidInput for a frame without vertex ids (not `topotrack track` output).
-LoadedFrame load_frame(const std::filesystem::path& path, bool require_ids);
+FrameFile read_frame_file(const std::filesystem::path& path, bool require_ids);
 
 //! Set (replace or add) attribute `name` of `data`. \throw InvalidInput when values.size() != width * vertices.
 void set_attribute(MeshData& data, const std::string& name, int width, std::vector<float> values);

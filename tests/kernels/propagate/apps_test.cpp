@@ -178,10 +178,10 @@ TEST(FrameGeometry, LoadFrame) {
   write_ply(dir / "plain.ply", d);
   d.ids = std::vector<std::int64_t>{5, 6, 7};
   write_ply(dir / "tracked.ply", d);
-  EXPECT_EQ(load_frame(dir / "tracked.ply", true).geometry.ids, (std::vector<VertexId>{5, 6, 7}));
-  EXPECT_TRUE(load_frame(dir / "plain.ply", false).geometry.ids.empty());
+  EXPECT_EQ(read_frame_file(dir / "tracked.ply", true).geometry.ids, (std::vector<VertexId>{5, 6, 7}));
+  EXPECT_TRUE(read_frame_file(dir / "plain.ply", false).geometry.ids.empty());
   try {
-    load_frame(dir / "plain.ply", true);
+    read_frame_file(dir / "plain.ply", true);
     ADD_FAILURE() << "no exception";
   } catch (const InvalidInput& e) {
     EXPECT_NE(std::string(e.what()).find("plain.ply: no vertex ids"), std::string::npos) << e.what();
@@ -189,12 +189,12 @@ TEST(FrameGeometry, LoadFrame) {
   d.ids = std::vector<std::int64_t>{5, 5, 7};
   write_ply(dir / "repeated.ply", d);
   try {
-    load_frame(dir / "repeated.ply", true);
+    read_frame_file(dir / "repeated.ply", true);
     ADD_FAILURE() << "no exception";
   } catch (const InvalidInput& e) {
     EXPECT_NE(std::string(e.what()).find("repeated.ply: vertex id 5 appears twice"), std::string::npos) << e.what();
   }
-  EXPECT_THROW(load_frame(dir / "missing.ply", true), Error);
+  EXPECT_THROW(read_frame_file(dir / "missing.ply", true), Error);
   std::filesystem::remove_all(dir);
 }
 
