@@ -36,6 +36,12 @@ function(topotrack_test name)
     TOPOTRACK_SHARED_DIR="${PROJECT_SOURCE_DIR}/../shared"
     TOPOTRACK_BINARY_DIR="${PROJECT_BINARY_DIR}")
   topotrack_warnings(${name})
+  # Several sources: one unity source, so gtest's, Eigen's and OpenVDB's headers are parsed once per executable
+  # (the build's time on the 2-core CI machine is mostly those headers; tools/CMakeLists.txt).
+  list(LENGTH ARG_SOURCES n_sources)
+  if(n_sources GREATER 1)
+    set_target_properties(${name} PROPERTIES UNITY_BUILD ON UNITY_BUILD_BATCH_SIZE 0)
+  endif()
   include(GoogleTest)
   gtest_discover_tests(${name} DISCOVERY_TIMEOUT 60 PROPERTIES LABELS "${ARG_LABELS}")
 endfunction()

@@ -16,4 +16,4 @@ void add_all_commands(CLI::App& app);
 }  // namespace topotrack::cli
 
 #define TOPOTRACK_COMMAND(order, fn) \
-  static const ::topotrack::cli::CommandRegistrar topotrack_command_registrar_{order, fn}
+  static const ::topotrack::cli::CommandRegistrar topotrack_command_registrar_##fn{order, fn}
