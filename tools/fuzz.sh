@@ -19,7 +19,9 @@ targets=("$@")
 CXX=${CXX:-clang++-14} cmake -S . -B "$BUILD_DIR" -DCMAKE_BUILD_TYPE=RelWithDebInfo \
   -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g" -DTOPOTRACK_FUZZ=ON -DTOPOTRACK_SANITIZE=address,undefined \
   -DTOPOTRACK_BUILD_BENCH=OFF >/dev/null
-cmake --build "$BUILD_DIR" -j"${JOBS:-$(nproc)}" --target "${targets[@]}"
+build_targets=("${targets[@]}")
+[[ $# -gt 0 ]] || build_targets=(fuzz_all)  # all three side by side (tests/fuzz/CMakeLists.txt)
+cmake --build "$BUILD_DIR" -j"${JOBS:-$(nproc)}" --target "${build_targets[@]}"
 
 export ASAN_OPTIONS=${ASAN_OPTIONS:-detect_leaks=1:halt_on_error=1}
 export UBSAN_OPTIONS=${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}

@@ -3,7 +3,7 @@
 # in ./build-asan (or $BUILD_DIR), then the test suite under the sanitizers; any finding fails the run.
 #   bash tools/sanitize.sh            everything but the `slow` label and install.consumer
 #   bash tools/sanitize.sh --all      also the `slow` label
-#   bash tools/sanitize.sh --quick    only io_test, mesh_test, sdf_test (the readers, the half-edge mesh, signed
+#   bash tools/sanitize.sh --quick    only io_test, mesh_test, sdf_test (target sanitize_quick: the readers, the half-edge mesh, signed
 #                                     distance and marching cubes): the part that fits in CI (docs/robustness.md)
 #   bash tools/sanitize.sh -R regex   only the matching tests (passed to ctest)
 # install.consumer is never run here: it installs the package and builds an unsanitized consumer against it.
@@ -19,7 +19,7 @@ args=()
 while [[ $# -gt 0 ]]; do
   case "$1" in
     --all) exclude='install'; shift ;;
-    --quick) targets=(io_test mesh_test sdf_test); exclude='slow|install|cli'; shift ;;
+    --quick) targets=(sanitize_quick); exclude='slow|install|cli'; shift ;;
     *) args+=("$1"); shift ;;
   esac
 done
