@@ -1,4 +1,16 @@
 # Per-target warnings (no global flags).
+
+# topotrack_unity(TARGET BATCH): compile TARGET's sources as unity sources of BATCH files each (0: one for all).
+# The one place the project's unity builds are set. Off under the sanitizers (TOPOTRACK_SANITIZE): there a unity
+# source is one long instrumented compile on one core at the end of the build, while its files one by one share
+# both cores (tools/sanitize.sh --quick, in CI).
+function(topotrack_unity target batch)
+  get_target_property(sources ${target} SOURCES)
+  list(LENGTH sources n_sources)
+  if(n_sources GREATER 1 AND NOT TOPOTRACK_SANITIZE)
+    set_target_properties(${target} PROPERTIES UNITY_BUILD ON UNITY_BUILD_BATCH_SIZE ${batch})
+  endif()
+endfunction()
 function(topotrack_warnings target)
   target_compile_options(${target} PRIVATE -Wall -Wextra -Wpedantic -Wshadow=local
     -Wno-deprecated-declarations -Wno-unused-parameter)
@@ -38,10 +50,7 @@ function(topotrack_test name)
   topotrack_warnings(${name})
   # Several sources: one unity source, so gtest's, Eigen's and OpenVDB's headers are parsed once per executable
   # (the build's time on the 2-core CI machine is mostly those headers; tools/CMakeLists.txt).
-  list(LENGTH ARG_SOURCES n_sources)
-  if(n_sources GREATER 1)
-    set_target_properties(${name} PROPERTIES UNITY_BUILD ON UNITY_BUILD_BATCH_SIZE 0)
-  endif()
+  topotrack_unity(${name} 0)
   include(GoogleTest)
   gtest_discover_tests(${name} DISCOVERY_TIMEOUT 60 PROPERTIES LABELS "${ARG_LABELS}")
 endfunction()
