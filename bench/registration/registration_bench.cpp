@@ -186,6 +186,10 @@ void BM_AlignCoarseFine(benchmark::State& state) {
   alignment_counters(state, c, fr);
   state.counters["truth_pct"] = truth;  // mean ground-truth error, % of the target's bounding-box diagonal
   state.counters["relax_s"] = fr.relax.seconds_total;
+  state.counters["relax_setup_s"] = fr.relax.seconds_setup;
+  state.counters["relax_closest_s"] = fr.relax.seconds_closest;
+  state.counters["relax_rotations_s"] = fr.relax.seconds_rotations;
+  state.counters["relax_solve_s"] = fr.relax.seconds_solve;
   state.counters["vertices"] = double(f.source.n_vertices());
   state.counters["levels"] = c.levels;
   state.counters["factor_nnz"] = double(c.factor_nonzeros);

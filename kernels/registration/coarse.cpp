@@ -584,7 +584,9 @@ void apply_system(const DeformationGraph& g, const NodeSystem& sys, const Eigen:
   }
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nn, 128), [&](const auto& range) {
     for (std::size_t j = range.begin(); j != range.end(); ++j) {
-      Vec12 yj = sys.diag[j] * x.segment<12>(Eigen::Index(12 * j));
+      // lazyProduct: an unrolled product; Eigen's `*` called its general GEMV kernel for this fixed 12 x 12 block, 1.3x
+      // the time in isolation (2,000 blocks, the same sums to the bit).
+      Vec12 yj = sys.diag[j].lazyProduct(x.segment<12>(Eigen::Index(12 * j)));
       if (vf)  // the vertices node j skins, their whole share (diag[j] holds none of it): w_j u (x) W_v J_v x
         for (Index e = vf->node_offset[j]; e < vf->node_offset[j + 1]; ++e) {
           const std::size_t slot = vf->entry_slot[e];
@@ -622,7 +624,7 @@ int preconditioned_cg(const DeformationGraph& g, const NodeSystem& sys, const Bl
   auto apply_blocks = [&](const Eigen::VectorXd& r, Eigen::VectorXd& z, bool add) {
     tbb::parallel_for(tbb::blocked_range<Eigen::Index>(0, nn, 256), [&](const auto& range) {
       for (Eigen::Index j = range.begin(); j != range.end(); ++j) {
-        const Vec12 zj = sys.diag_inverse[std::size_t(j)] * r.segment<12>(12 * j);
+        const Vec12 zj = sys.diag_inverse[std::size_t(j)].lazyProduct(r.segment<12>(12 * j));  // as in apply_system
         if (add) z.segment<12>(12 * j) += zj;
         else z.segment<12>(12 * j) = zj;
       }

@@ -77,6 +77,61 @@ Adjacency cotangent_adjacency(const SurfaceMesh& mesh, std::span<const Vec3> res
   return a;
 }
 
+// The order the iterations number the vertices in: breadth-first over the mesh's edges from the lowest-numbered
+// vertex of each component, the vertices in no edge last. The global step's products read every neighbour's row, and
+// a mesh's own numbering can put an edge's ends tens of thousands of rows apart (kernels/mesh/edge_graph.cpp); in
+// this order they lie near each other, and so do the closest-point queries of one chunk of vertices.
+struct Ordering {
+  std::vector<Index> vertex;  // new number -> vertex handle index
+  std::vector<Index> number;  // vertex handle index -> new number
+};
+
+Ordering breadth_first(const Adjacency& a) {
+  const std::size_t n = a.degree.size();
+  Ordering o;
+  o.number.assign(n, kInvalidIndex);
+  o.vertex.reserve(n);
+  for (std::size_t root = 0; root < n; ++root) {
+    if (!a.live(root) || o.number[root] != kInvalidIndex) continue;
+    o.number[root] = Index(o.vertex.size());
+    o.vertex.push_back(Index(root));
+    for (std::size_t head = o.vertex.size() - 1; head < o.vertex.size(); ++head) {
+      const Index u = o.vertex[head];
+      for (Index q = a.offset[u]; q < a.offset[u + 1]; ++q)
+        if (const Index t = a.neighbor[q]; o.number[t] == kInvalidIndex) {
+          o.number[t] = Index(o.vertex.size());
+          o.vertex.push_back(t);
+        }
+    }
+  }
+  for (std::size_t v = 0; v < n; ++v)
+    if (o.number[v] == kInvalidIndex) {
+      o.number[v] = Index(o.vertex.size());
+      o.vertex.push_back(Index(v));
+    }
+  return o;
+}
+
+// `a` renumbered by `o` (rows in the new order, neighbours by new number, each row's order kept).
+Adjacency renumbered(const Adjacency& a, const Ordering& o) {
+  const std::size_t n = a.degree.size();
+  Adjacency b;
+  b.offset.assign(n + 1, 0);
+  b.neighbor.reserve(a.neighbor.size());
+  b.weight.reserve(a.weight.size());
+  b.degree.resize(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const Index v = o.vertex[i];
+    for (Index q = a.offset[v]; q < a.offset[v + 1]; ++q) {
+      b.neighbor.push_back(o.number[a.neighbor[q]]);
+      b.weight.push_back(a.weight[q]);
+    }
+    b.offset[i + 1] = Index(b.neighbor.size());
+    b.degree[i] = a.degree[v];
+  }
+  return b;
+}
+
 constexpr double kCoarseSpacing = 4;  // the coarse level's node spacing in mean edge lengths (§4.2's)
 
 // The coarse level of the global step's two-level preconditioner: the deformation graph of the rest shape (§4.2's
@@ -86,7 +141,8 @@ constexpr double kCoarseSpacing = 4;  // the coarse level's node spacing in mean
 // than the mesh (98k vertices: 3.5 s for the stage against 2.5 s; docs/results.md, 2026-12-07).
 class CoarseLevel {
 public:
-  CoarseLevel(const SurfaceMesh& mesh, std::span<const Vec3> rest, const Adjacency& a, double shift) {
+  //! `a` by new number (`o`); `mesh` and `rest` by vertex handle index.
+  CoarseLevel(const SurfaceMesh& mesh, std::span<const Vec3> rest, const Adjacency& a, const Ordering& o, double shift) {
     SurfaceMesh at_rest = mesh.clone();
     std::copy(rest.begin(), rest.end(), at_rest.positions().begin());
     const DeformationGraph g = build_deformation_graph(at_rest, kCoarseSpacing * mean_edge_length(at_rest), 4);
@@ -97,10 +153,11 @@ public:
     for (std::size_t v = 0; v < n; ++v) {
       row_offset_[v + 1] = row_offset_[v];
       if (!a.live(v)) continue;
+      const std::size_t h = o.vertex[v];
       for (std::size_t t = 0; t < K; ++t)
-        if (const Index j = g.influence_node[v * K + t]; j != kInvalidIndex) {
+        if (const Index j = g.influence_node[h * K + t]; j != kInvalidIndex) {
           row_node_.push_back(j);
-          row_weight_.push_back(g.influence_weight[v * K + t]);
+          row_weight_.push_back(g.influence_weight[h * K + t]);
           ++row_offset_[v + 1];
           ++col_offset_[j + 1];
         }
@@ -203,11 +260,18 @@ RelaxReport relax_on_target(SurfaceMesh& mesh, std::span<const Vec3> rest, const
 
   auto t0 = Clock::now();
   const double lambda = params.plane_weight, beta = params.point_weight;
-  const Adjacency adj = cotangent_adjacency(mesh, rest);
-  const CoarseLevel coarse(mesh, rest, adj, lambda * beta);
+  const Adjacency by_handle = cotangent_adjacency(mesh, rest);
+  const Ordering order = breadth_first(by_handle);
+  const Adjacency adj = renumbered(by_handle, order);
+  const CoarseLevel coarse(mesh, rest, adj, order, lambda * beta);
+  // Everything below by new number: x and p, the positions and the rest shape, copied in and x copied back at the end.
+  std::vector<Vec3> x(n), p_rest(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    x[i] = mesh.positions()[order.vertex[i]];
+    p_rest[i] = rest[order.vertex[i]];
+  }
   rep.seconds_setup = seconds_since(t0);
 
-  std::vector<Vec3>& x = mesh.positions();
   std::vector<Mat3> R(n, Mat3::Identity()), M(n, Mat3::Identity()), M_inverse(n, Mat3::Identity());
   std::vector<TargetSurface::Hit> hit(n);
   std::vector<Vec3> moved(n, Vec3::Zero());  // how far each vertex went since its closest point was found
@@ -261,7 +325,7 @@ RelaxReport relax_on_target(SurfaceMesh& mesh, std::span<const Vec3> rest, const
       double e = 0;
       for (Index q = adj.offset[i]; q < adj.offset[i + 1]; ++q) {
         const Index j = adj.neighbor[q];
-        e += 0.5 * adj.weight[q] * ((x[i] - x[j]) - 0.5 * (R[i] + R[j]) * (rest[i] - rest[j])).squaredNorm();
+        e += 0.5 * adj.weight[q] * ((x[i] - x[j]) - 0.5 * (R[i] + R[j]) * (p_rest[i] - p_rest[j])).squaredNorm();
       }
       if (!fitted[i]) return Vec3(e, 0, 0);
       const Vec3 d = x[i] - hit[i].point;
@@ -287,8 +351,8 @@ RelaxReport relax_on_target(SurfaceMesh& mesh, std::span<const Vec3> rest, const
       const Index components = connected_components(mesh, &component);
       std::vector<char> reached(components, 0);
       for (std::size_t i = 0; i < n; ++i)
-        if (fitted[i]) reached[component[i]] = 1;
-      for (std::size_t i = 0; i < n; ++i) moving[i] = adj.live(i) && reached[component[i]];
+        if (fitted[i]) reached[component[order.vertex[i]]] = 1;
+      for (std::size_t i = 0; i < n; ++i) moving[i] = adj.live(i) && reached[component[order.vertex[i]]];
     }
     const Vec3 fit_sum = deterministic_sum(n, [&](std::size_t i) { return Vec3(fitted[i] ? hit[i].distance : 0.0, fitted[i] ? 1.0 : 0.0, 0); });
     rep.fitted = std::size_t(fit_sum[1]);
@@ -301,7 +365,7 @@ RelaxReport relax_on_target(SurfaceMesh& mesh, std::span<const Vec3> rest, const
       Mat3 A = Mat3::Zero();
       for (Index q = adj.offset[i]; q < adj.offset[i + 1]; ++q) {
         const Index j = adj.neighbor[q];
-        A += adj.weight[q] * (x[i] - x[j]) * (rest[i] - rest[j]).transpose();
+        A += adj.weight[q] * (x[i] - x[j]) * (p_rest[i] - p_rest[j]).transpose();
       }
       R[i] = fit_rotation(A);
     });
@@ -319,7 +383,7 @@ RelaxReport relax_on_target(SurfaceMesh& mesh, std::span<const Vec3> rest, const
       Vec3 b = fit * hit[i].point;
       for (Index q = adj.offset[i]; q < adj.offset[i + 1]; ++q) {
         const Index j = adj.neighbor[q];
-        b += 0.5 * adj.weight[q] * (R[i] + R[j]) * (rest[i] - rest[j]);
+        b += 0.5 * adj.weight[q] * (R[i] + R[j]) * (p_rest[i] - p_rest[j]);
       }
       set_row(rhs, i, b);
     });
@@ -354,6 +418,7 @@ RelaxReport relax_on_target(SurfaceMesh& mesh, std::span<const Vec3> rest, const
     rep.iterations = it + 1;
   }
   rep.energy_end = energy();  // reported only: once, at the last step's rotations and correspondences
+  for (std::size_t i = 0; i < n; ++i) mesh.positions()[order.vertex[i]] = x[i];
   rep.coarse_nodes = int(coarse.nodes());
   rep.seconds_total = seconds_since(t_total);
   return rep;
