@@ -11,7 +11,6 @@ namespace topotrack {
 namespace {
 
 using namespace sdf_shapes;
-constexpr double kPi = std::numbers::pi;
 
 // The pool: a rounded box, surface at z = 0, 1.7 wide, 0.4 deep.
 constexpr double kPoolHalf = 0.85, kPoolDepth = 0.4, kPoolRound = 0.05;
@@ -42,16 +41,16 @@ double phase(double t, double start, double span) { return std::clamp((t - start
 
 // Crater radius at the pool surface and crown height over the crown phase.
 double crater_radius(double s) { return 0.12 + 0.25 * std::sqrt(s); }
-double crown_height(double s) { return kCrownHeight * std::sin(kPi * s); }
+double crown_height(double s) { return kCrownHeight * std::sin(std::numbers::pi * s); }
 // Meridian coordinates (r, z) of the crown's rim.
 Eigen::Vector2d crown_rim(double s) {
   const double h = crown_height(s);
   return {crater_radius(s) + kFlare * h / kCrownHeight, h};
 }
-double jet_height(double s) { return kJetHeight * std::sin(kPi * s); }
-double crater_depth(double s) { return kCraterDepth * std::sin(kPi * s); }
+double jet_height(double s) { return kJetHeight * std::sin(std::numbers::pi * s); }
+double crater_depth(double s) { return kCraterDepth * std::sin(std::numbers::pi * s); }
 // Crown wall and jet fade in and out by thinning and sinking below the surface, so that no frame pops.
-double fade(double s) { return std::min(1.0, 5.0 * std::sin(kPi * s)); }
+double fade(double s) { return std::min(1.0, 5.0 * std::sin(std::numbers::pi * s)); }
 
 // A drop sinking into the pool shrinks to nothing over its first 0.15 below the surface, so it never pokes
 // out of the pool's bottom.
@@ -64,7 +63,7 @@ SplashScene::SplashScene(unsigned seed) {
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   for (int k = 0; k < kDroplets; ++k) {
     Droplet d;
-    d.angle = 2.0 * kPi * (k + 0.3 * u(rng)) / kDroplets;
+    d.angle = 2.0 * std::numbers::pi * (k + 0.3 * u(rng)) / kDroplets;
     d.radius = 0.0475 + 0.0075 * u(rng);
     d.speed_out = 0.7 * (1.0 + 0.15 * u(rng));
     d.speed_up = 1.6 * (1.0 + 0.1 * u(rng));

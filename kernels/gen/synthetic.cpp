@@ -11,7 +11,6 @@ namespace topotrack {
 namespace {
 
 using namespace sdf_shapes;
-constexpr double kPi = std::numbers::pi;
 constexpr double kBlobBlend = 0.25, kBallBlend = 0.15;
 
 // Default resolutions: about 10k-20k vertices per frame.
@@ -116,7 +115,7 @@ void SyntheticScene::check_frame(int frame) const {
 RigidMotion SyntheticScene::blobs_motion(int frame) const {
   RigidMotion m;
   // One full turn over the sequence: frame N + 1 would be frame 1 again.
-  const double angle = 2.0 * kPi * double(frame - 1) / double(params_.frames);
+  const double angle = 2.0 * std::numbers::pi * double(frame - 1) / double(params_.frames);
   m.rotation = Eigen::AngleAxisd(angle, axis_).toRotationMatrix();
   return m;
 }
@@ -128,9 +127,9 @@ std::pair<int, double> SyntheticScene::morph_blend(int frame) const {
 
 std::vector<Ball> SyntheticScene::metaballs(int frame) const {
   const double t = time(frame);
-  const double s = std::sin(kPi * t);
+  const double s = std::sin(std::numbers::pi * t);
   const double d = 0.25 + 0.65 * s * s;  // merged at the ends, apart mid-way
-  const Eigen::Matrix3d turn = Eigen::AngleAxisd(kPi * t, Vec3::UnitZ()).toRotationMatrix();
+  const Eigen::Matrix3d turn = Eigen::AngleAxisd(std::numbers::pi * t, Vec3::UnitZ()).toRotationMatrix();
   std::vector<Ball> balls;
   for (std::size_t i = 0; i < ball_dirs_.size(); ++i) balls.push_back({turn * (d * ball_dirs_[i]), ball_radii_[i]});
   return balls;

@@ -37,10 +37,6 @@ struct Scratch {
   std::vector<std::array<std::uint32_t, 2>> seg_id;
 };
 
-double orient2(double ax, double ay, double bx, double by, double cx, double cy) {
-  return (bx - ax) * (cy - ay) - (by - ay) * (cx - ax);
-}
-
 // Whether two of M's cut curves cross on a face of the cell (Wojtan et al. 2009 face test; a crossing
 // means two sheets of M intersect there, which the loop matching cannot see).
 bool curves_cross(const SurfaceMesh& mesh, const LatticeCut& cut, Scratch& s) {
@@ -69,11 +65,7 @@ bool curves_cross(const SurfaceMesh& mesh, const LatticeCut& cut, Scratch& s) {
         const auto& ki = s.seg_id[i];
         const auto& kj = s.seg_id[j];
         if (ki[0] == kj[0] || ki[0] == kj[1] || ki[1] == kj[0] || ki[1] == kj[1]) continue;
-        const auto& p = s.seg[i];
-        const auto& q = s.seg[j];
-        const double o1 = orient2(p[0], p[1], p[2], p[3], q[0], q[1]), o2 = orient2(p[0], p[1], p[2], p[3], q[2], q[3]);
-        const double o3 = orient2(q[0], q[1], q[2], q[3], p[0], p[1]), o4 = orient2(q[0], q[1], q[2], q[3], p[2], p[3]);
-        if (((o1 > 0 && o2 < 0) || (o1 < 0 && o2 > 0)) && ((o3 > 0 && o4 < 0) || (o3 < 0 && o4 > 0))) return true;
+        if (segments_cross(s.seg[i].data(), s.seg[j].data())) return true;
       }
   }
   return false;

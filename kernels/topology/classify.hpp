@@ -115,4 +115,15 @@ std::vector<std::uint64_t> complex_cells(const SurfaceMesh& mesh, const LatticeC
                                          const openvdb::FloatGrid& theta, ClassifyPath path = ClassifyPath::kFast,
                                          VerdictCounts* by_verdict = nullptr);
 
+//! The face test of both cell tests (classify.cpp, classify_fast.cpp; Wojtan et al. 2009): whether the 2D segments
+//! (p[0], p[1])-(p[2], p[3]) and (q[0], q[1])-(q[2], q[3]) cross at a point inside both (touching does not count).
+inline bool segments_cross(const double* p, const double* q) {
+  const auto orient = [](double ax, double ay, double bx, double by, double cx, double cy) {
+    return (bx - ax) * (cy - ay) - (by - ay) * (cx - ax);
+  };
+  const double o1 = orient(p[0], p[1], p[2], p[3], q[0], q[1]), o2 = orient(p[0], p[1], p[2], p[3], q[2], q[3]);
+  const double o3 = orient(q[0], q[1], q[2], q[3], p[0], p[1]), o4 = orient(q[0], q[1], q[2], q[3], p[2], p[3]);
+  return ((o1 > 0 && o2 < 0) || (o1 < 0 && o2 > 0)) && ((o3 > 0 && o4 < 0) || (o3 < 0 && o4 > 0));
+}
+
 }  // namespace topotrack::topology

@@ -37,10 +37,6 @@ std::uint8_t find(std::uint8_t* p, std::uint8_t x) {
   return x;
 }
 
-double orient2(double ax, double ay, double bx, double by, double cx, double cy) {
-  return (bx - ax) * (cy - ay) - (by - ay) * (cx - ax);
-}
-
 // The reference's face test (classify.cpp, curves_cross) over the boundary edges v -> out[v]: on each cube
 // face holding two segments that are not one chain, or more than two, no two segments without a common
 // end may cross.
@@ -86,11 +82,7 @@ bool curves_cross(const SurfaceMesh& mesh, const LatticeCut& cut, const FastCell
         const Seg& P = seg[i];
         const Seg& Q = seg[j];
         if (P.a == Q.a || P.a == Q.b || P.b == Q.a || P.b == Q.b) continue;
-        const double* p = P.p;
-        const double* q = Q.p;
-        const double o1 = orient2(p[0], p[1], p[2], p[3], q[0], q[1]), o2 = orient2(p[0], p[1], p[2], p[3], q[2], q[3]);
-        const double o3 = orient2(q[0], q[1], q[2], q[3], p[0], p[1]), o4 = orient2(q[0], q[1], q[2], q[3], p[2], p[3]);
-        if (((o1 > 0 && o2 < 0) || (o1 < 0 && o2 > 0)) && ((o3 > 0 && o4 < 0) || (o3 < 0 && o4 > 0))) return true;
+        if (segments_cross(P.p, Q.p)) return true;
       }
   }
   return false;
