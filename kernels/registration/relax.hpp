@@ -33,7 +33,8 @@ struct RelaxParams {
 //! sums of the ground-truth error over frames k = 1, 3, 5, 7, 9 -> k + 15 at two re-samplings of the target, % of the
 //! diagonal, without -> 10 iterations: elephant 8.147 -> 6.728, pcow 24.990 -> 20.967, samba 1.662 -> 1.243 (20: 6.432,
 //! 21.088, 1.223, for twice the stage's time: 0.8-0.9 s at 47k vertices, 2.2 s at 98k on the 2-core bench host).
-//! Point-to-plane weight 3 / 30 instead of 10: 6.618 / 7.008, 22.014 / 20.993, 1.344 / 1.232.
+//! Point-to-plane weight 3 / 30 instead of 10: 6.618 / 7.008, 22.014 / 20.993, 1.344 / 1.232. With the vertices
+//! numbered breadth-first (2026-12-08): 6.730, 20.957, 1.2433 and 0.80-0.92 s at 47k, 1.69-1.77 s at 98k.
 inline constexpr int kLargeMotionRelaxIterations = 10;
 
 struct RelaxReport {
