@@ -148,21 +148,9 @@ struct WalkGraph {
 WalkGraph walk_graph(const EdgeGraph& graph) {
   const std::size_t n = graph.n_vertices();
   WalkGraph w;
+  w.vertex = breadth_first_order(graph.offset, graph.target);
   w.number.assign(n, kInvalidIndex);
-  w.vertex.reserve(n);
-  for (Index root = 0; root < n; ++root) {
-    if (w.number[root] != kInvalidIndex) continue;
-    w.number[root] = Index(w.vertex.size());
-    w.vertex.push_back(root);
-    for (std::size_t head = w.vertex.size() - 1; head < w.vertex.size(); ++head) {
-      const Index u = w.vertex[head];
-      for (Index i = graph.offset[u]; i < graph.offset[u + 1]; ++i)
-        if (const Index t = graph.target[i]; w.number[t] == kInvalidIndex) {
-          w.number[t] = Index(w.vertex.size());
-          w.vertex.push_back(t);
-        }
-    }
-  }
+  for (std::size_t k = 0; k < n; ++k) w.number[w.vertex[k]] = Index(k);
   w.offset.assign(n + 1, 0);
   w.arc.reserve(graph.target.size());
   for (std::size_t k = 0; k < n; ++k) {
@@ -197,6 +185,27 @@ void walk_distances(const WalkGraph& g, Index source, std::vector<float>& dist) 
 }
 
 }  // namespace
+
+std::vector<Index> breadth_first_order(std::span<const Index> offset, std::span<const Index> target) {
+  const std::size_t n = offset.empty() ? 0 : offset.size() - 1;
+  std::vector<Index> vertex;
+  vertex.reserve(n);
+  std::vector<char> reached(n, 0);
+  for (Index root = 0; root < n; ++root) {
+    if (reached[root]) continue;
+    reached[root] = 1;
+    vertex.push_back(root);
+    for (std::size_t head = vertex.size() - 1; head < vertex.size(); ++head) {
+      const Index u = vertex[head];
+      for (Index i = offset[u]; i < offset[u + 1]; ++i)
+        if (const Index t = target[i]; !reached[t]) {
+          reached[t] = 1;
+          vertex.push_back(t);
+        }
+    }
+  }
+  return vertex;
+}
 
 std::vector<std::vector<float>> geodesic_distances(const EdgeGraph& graph, std::span<const Index> sources) {
   for (const Index s : sources)

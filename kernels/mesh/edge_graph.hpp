@@ -44,6 +44,12 @@ void grow_distances(const EdgeGraph& graph, double limit, std::vector<double>& d
 //! arithmetic, whatever the thread count. \throw InvalidInput on a source out of range.
 std::vector<std::vector<float>> geodesic_distances(const EdgeGraph& graph, std::span<const Index> sources);
 
+//! The vertices in breadth-first order over a graph given as CSR (the neighbours of v are
+//! target[offset[v]] .. target[offset[v + 1] - 1]): from each vertex not yet reached, in index order, every vertex
+//! it reaches, level by level. new number -> vertex. Adjacent vertices get near numbers, which is what the walks
+//! over a mesh's rows want from it (a mesh's own numbering can put an edge's ends tens of thousands apart).
+std::vector<Index> breadth_first_order(std::span<const Index> offset, std::span<const Index> target);
+
 //! Geodesic Poisson-disk sampling: visit vertices in index order and make each non-isolated vertex
 //! farther than `spacing` from every sample so far a sample (coverage: distances strictly below
 //! `spacing`). Deterministic.
