@@ -247,7 +247,7 @@ RelaxReport relax_on_target(SurfaceMesh& mesh, std::span<const Vec3> rest, const
   const Ordering order = breadth_first(by_handle);
   const Adjacency adj = renumbered(by_handle, order);
   const CoarseLevel coarse(mesh, rest, adj, order, lambda * beta);
-  // Everything below by new number: x and p, the positions and the rest shape, copied in and x copied back at the end.
+  // Everything below by new number: x and p_rest, the positions and the rest shape, copied in (x back at the end).
   std::vector<Vec3> x(n), p_rest(n);
   for (std::size_t i = 0; i < n; ++i) {
     x[i] = mesh.positions()[order.vertex[i]];
